@@ -1,0 +1,3 @@
+//! The `bounded` command-line tool.
+
+fn main() {}
