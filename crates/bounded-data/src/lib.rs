@@ -1,1 +1,19 @@
-//! Placeholder: filled in by its issue.
+//! Point-cloud formats, labelled datasets and the synthetic training-set generator for BoundED.
+//!
+//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ.
+
+mod error;
+mod labelled;
+
+pub mod abc;
+pub mod dataset;
+pub mod format;
+pub mod las;
+pub mod pcd;
+pub mod ply;
+pub mod synth;
+pub mod table;
+pub mod xyz;
+
+pub use error::DataError;
+pub use labelled::LabelledCloud;

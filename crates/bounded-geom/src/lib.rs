@@ -11,8 +11,10 @@
 //! assert_eq!(cloud.position_f64(1), [5_403_151.0, 10.0, 1.0]);
 //! ```
 
+mod class;
 mod cloud;
 mod error;
 
+pub use class::Class;
 pub use cloud::PointCloud;
 pub use error::GeomError;

@@ -1,0 +1,1 @@
+//! ABC dataset loader: OBJ mesh + features YAML.

@@ -1,0 +1,1 @@
+//! Labelled datasets: directories or generated sets with train / validation / evaluation roles.

@@ -1,0 +1,1 @@
+//! Format dispatch by file extension and atomic (temp file + rename) writing.

@@ -1,0 +1,1 @@
+//! LAS / LAZ reading and writing.

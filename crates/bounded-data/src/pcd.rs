@@ -1,0 +1,1 @@
+//! PCL's PCD format: ascii, binary and binary_compressed.

@@ -1,0 +1,1 @@
+//! PLY: ascii and binary, any vertex properties.

@@ -1,0 +1,1 @@
+//! The synthetic labelled training-set generator.

@@ -1,0 +1,1 @@
+//! XYZ / TXT / CSV text formats.
