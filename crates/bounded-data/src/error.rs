@@ -1,14 +1,39 @@
+use std::path::PathBuf;
 use thiserror::Error;
 
 /// Errors of reading, writing and generating point clouds.
+///
+/// Every variant names the file it concerns, so a command-line user sees which input is bad.
 #[derive(Debug, Error)]
 pub enum DataError {
     /// An I/O failure on a named file.
     #[error("{path}: {source}")]
     Io {
         /// The file.
-        path: std::path::PathBuf,
+        path: PathBuf,
         /// The underlying error.
         source: std::io::Error,
+    },
+    /// The file's content does not follow its format.
+    #[error("{path}: {what}")]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, in words (with the line or byte offset where known).
+        what: String,
+    },
+    /// The file extension names no supported format.
+    #[error("{path}: unknown point-cloud format (supported: .ply .pcd .xyz .txt .csv .las .laz)")]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The positions read do not form a valid cloud (empty, NaN / infinite coordinates).
+    #[error("{path}: {source}")]
+    Geom {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: bounded_geom::GeomError,
     },
 }
