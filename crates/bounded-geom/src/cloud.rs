@@ -103,8 +103,8 @@ mod tests {
 
     #[test]
     fn recentres_utm_coordinates_with_millimetre_precision() {
-        let c = PointCloud::from_f64(&[[5_403_150.0, 0.0, 0.0], [5_403_150.001, 0.0, 0.0]])
-            .unwrap();
+        let c =
+            PointCloud::from_f64(&[[5_403_150.0, 0.0, 0.0], [5_403_150.001, 0.0, 0.0]]).unwrap();
         let d = c.points()[1][0] - c.points()[0][0];
         assert!((d - 0.001).abs() < 1e-6, "{d}");
         assert!((c.position_f64(1)[0] - 5_403_150.001).abs() < 1e-6);

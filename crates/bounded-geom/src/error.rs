@@ -24,4 +24,10 @@ pub enum GeomError {
         /// Neighbours requested.
         k: usize,
     },
+    /// More points than 32-bit neighbour indices can address.
+    #[error("the cloud has {points} points; at most 4294967295 are supported")]
+    TooManyPoints {
+        /// Number of points in the cloud.
+        points: usize,
+    },
 }

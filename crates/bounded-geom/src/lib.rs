@@ -1,20 +1,35 @@
-//! Point clouds and neighbourhood search for BoundED.
+//! Point clouds, neighbourhood search and 3x3 numerics for BoundED.
 //!
 //! [`PointCloud`] keeps the original coordinates' origin in `f64` and the points
 //! re-centred in `f32`, so clouds in UTM coordinates (5,403,150 m, where `f32`
 //! alone resolves only 0.5 m) keep millimetre precision.
 //!
+//! [`KnnIndex`] answers one exact k-nearest-neighbour query per point, in Morton
+//! order and in chunks, so memory stays `O(chunk x k)`; [`Sym3`] solves the small
+//! symmetric eigen problems of the local statistics in closed form.
+//!
 //! ```
-//! use bounded_geom::PointCloud;
+//! use bounded_geom::{KnnIndex, PointCloud};
 //! let cloud = PointCloud::from_f64(&[[5_403_150.0, 10.0, 1.0], [5_403_151.0, 10.0, 1.0]]).unwrap();
 //! assert_eq!(cloud.len(), 2);
 //! assert_eq!(cloud.position_f64(1), [5_403_151.0, 10.0, 1.0]);
+//!
+//! let index = KnnIndex::new(&cloud).unwrap();
+//! let mut neighbours = [0u32; 2];
+//! index.nearest(1, &mut neighbours).unwrap();
+//! assert_eq!(neighbours, [1, 0]); // the point itself first
 //! ```
 
 mod class;
 mod cloud;
+mod eigen;
 mod error;
+mod knn;
+mod morton;
 
 pub use class::Class;
 pub use cloud::PointCloud;
+pub use eigen::{Eigen3, Sym3, cross, dot};
 pub use error::GeomError;
+pub use knn::{KnnIndex, NeighbourChunk};
+pub use morton::morton_order;

@@ -1,0 +1,289 @@
+//! Closed-form eigen decomposition of symmetric 3x3 matrices.
+//!
+//! BoundED needs four small eigen problems per point and scale, so a closed-form
+//! solver (Smith's trigonometric method) beats an iterative one by a wide margin.
+//! Eigenvectors come from cross products of the rows of `A - lambda I`, with explicit
+//! fallbacks when an eigenvalue is (numerically) repeated.
+
+/// A symmetric 3x3 matrix, stored by its upper triangle.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Sym3 {
+    /// Entry (0, 0).
+    pub xx: f64,
+    /// Entries (0, 1) and (1, 0).
+    pub xy: f64,
+    /// Entries (0, 2) and (2, 0).
+    pub xz: f64,
+    /// Entry (1, 1).
+    pub yy: f64,
+    /// Entries (1, 2) and (2, 1).
+    pub yz: f64,
+    /// Entry (2, 2).
+    pub zz: f64,
+}
+
+/// Eigenvalues (descending) and the unit eigenvector of the smallest one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Eigen3 {
+    /// Eigenvalues, largest first.
+    pub values: [f64; 3],
+    /// Unit eigenvector of `values[2]`; its sign is arbitrary.
+    pub smallest_vector: [f64; 3],
+}
+
+/// Relative size below which a cross product of two rows of `A - lambda I` counts as
+/// zero, i.e. the eigenvalue is treated as repeated. Measured against the spread of
+/// the eigenvalues squared, so it is scale free.
+const REPEATED: f64 = 1e-10;
+
+impl Sym3 {
+    /// The matrix' rows.
+    fn rows(&self) -> [[f64; 3]; 3] {
+        [
+            [self.xx, self.xy, self.xz],
+            [self.xy, self.yy, self.yz],
+            [self.xz, self.yz, self.zz],
+        ]
+    }
+
+    /// Eigenvalues, largest first.
+    ///
+    /// Exact for diagonal matrices; otherwise accurate to about `1e-15` times the
+    /// largest absolute eigenvalue. All-zero input gives zeros.
+    pub fn eigenvalues(&self) -> [f64; 3] {
+        let off = self.xy * self.xy + self.xz * self.xz + self.yz * self.yz;
+        if off == 0.0 {
+            let mut d = [self.xx, self.yy, self.zz];
+            d.sort_by(|a, b| b.total_cmp(a));
+            return d;
+        }
+        let q = (self.xx + self.yy + self.zz) / 3.0;
+        let (a, b, c) = (self.xx - q, self.yy - q, self.zz - q);
+        let p = ((a * a + b * b + c * c + 2.0 * off) / 6.0).sqrt();
+        // det((A - qI) / p) / 2, clamped against rounding outside [-1, 1].
+        let det = a * (b * c - self.yz * self.yz) - self.xy * (self.xy * c - self.yz * self.xz)
+            + self.xz * (self.xy * self.yz - b * self.xz);
+        let r = (det / (2.0 * p * p * p)).clamp(-1.0, 1.0);
+        let phi = r.acos() / 3.0;
+        let largest = q + 2.0 * p * phi.cos();
+        let smallest = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+        let middle = (3.0 * q - largest - smallest).clamp(smallest, largest);
+        [largest, middle, smallest]
+    }
+
+    /// Eigenvalues and the eigenvector of the smallest eigenvalue.
+    ///
+    /// When the smallest eigenvalue is repeated (collinear points), any unit vector
+    /// orthogonal to the largest eigenvalue's eigenvector is returned; when all three
+    /// are equal (e.g. the zero matrix), `[0, 0, 1]`.
+    pub fn eigen(&self) -> Eigen3 {
+        let values = self.eigenvalues();
+        let spread = values[0] - values[2];
+        let smallest_vector = if spread <= 0.0 {
+            [0.0, 0.0, 1.0]
+        } else if let Some(v) = self.null_vector(values[2], spread) {
+            v
+        } else if let Some(v) = self.null_vector(values[0], spread) {
+            any_orthogonal(v)
+        } else {
+            [0.0, 0.0, 1.0]
+        };
+        Eigen3 {
+            values,
+            smallest_vector,
+        }
+    }
+
+    /// Unit vector spanning the null space of `A - lambda I`, if that space is one
+    /// dimensional (the largest cross product of two rows is not negligible).
+    fn null_vector(&self, lambda: f64, spread: f64) -> Option<[f64; 3]> {
+        let mut r = self.rows();
+        for (i, row) in r.iter_mut().enumerate() {
+            row[i] -= lambda;
+        }
+        let best = [cross(r[0], r[1]), cross(r[0], r[2]), cross(r[1], r[2])]
+            .into_iter()
+            .map(|v| (dot(v, v), v))
+            .max_by(|a, b| a.0.total_cmp(&b.0))?;
+        let limit = REPEATED * spread * spread;
+        (best.0 > limit * limit).then(|| scale(best.1, 1.0 / best.0.sqrt()))
+    }
+}
+
+/// A unit vector orthogonal to the unit vector `v`, chosen deterministically.
+fn any_orthogonal(v: [f64; 3]) -> [f64; 3] {
+    // Cross with the axis along which `v` is shortest: never near-parallel.
+    let ax = v.map(f64::abs);
+    let axis = if ax[0] <= ax[1] && ax[0] <= ax[2] {
+        [1.0, 0.0, 0.0]
+    } else if ax[1] <= ax[2] {
+        [0.0, 1.0, 0.0]
+    } else {
+        [0.0, 0.0, 1.0]
+    };
+    let w = cross(v, axis);
+    scale(w, 1.0 / dot(w, w).sqrt())
+}
+
+/// Cross product.
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Dot product.
+pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `v * s`.
+fn scale(v: [f64; 3], s: f64) -> [f64; 3] {
+    v.map(|c| c * s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol
+    }
+
+    /// `|A v - lambda v|` for the smallest eigenpair.
+    fn residual(m: &Sym3, e: &Eigen3) -> f64 {
+        let v = e.smallest_vector;
+        let r = m.rows();
+        let av = [dot(r[0], v), dot(r[1], v), dot(r[2], v)];
+        let d = [0, 1, 2].map(|i| av[i] - e.values[2] * v[i]);
+        dot(d, d).sqrt()
+    }
+
+    #[test]
+    fn diagonal_matrix_sorted_descending() {
+        let m = Sym3 {
+            xx: 1.0,
+            yy: 3.0,
+            zz: 2.0,
+            ..Sym3::default()
+        };
+        let e = m.eigen();
+        assert_eq!(e.values, [3.0, 2.0, 1.0]);
+        assert_eq!(e.smallest_vector.map(f64::abs), [1.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn hand_computed_2x2_block() {
+        // [[2,1,0],[1,2,0],[0,0,5]]: eigenvalues 5, 3, 1; smallest vector (1,-1,0)/sqrt2.
+        let m = Sym3 {
+            xx: 2.0,
+            xy: 1.0,
+            yy: 2.0,
+            zz: 5.0,
+            ..Sym3::default()
+        };
+        let e = m.eigen();
+        for (got, want) in e.values.iter().zip([5.0, 3.0, 1.0]) {
+            assert!(close(*got, want, 1e-12), "{:?}", e.values);
+        }
+        let v = e.smallest_vector;
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        assert!(close(v[0].abs(), h, 1e-12) && close(v[1], -v[0], 1e-12) && v[2] == 0.0);
+    }
+
+    #[test]
+    fn full_matrix_matches_characteristic_polynomial() {
+        // [[4,1,2],[1,3,0],[2,0,5]]: trace 12, det 4*15 - 1*5 + 2*(-6) = 43.
+        let m = Sym3 {
+            xx: 4.0,
+            xy: 1.0,
+            xz: 2.0,
+            yy: 3.0,
+            yz: 0.0,
+            zz: 5.0,
+        };
+        let e = m.eigen();
+        let [a, b, c] = e.values;
+        assert!(a >= b && b >= c);
+        assert!(close(a + b + c, 12.0, 1e-12));
+        assert!(close(a * b * c, 43.0, 1e-10));
+        assert!(close(
+            a * b + a * c + b * c,
+            12.0 + 15.0 + 20.0 - 1.0 - 4.0,
+            1e-10
+        ));
+        assert!(residual(&m, &e) < 1e-12);
+    }
+
+    #[test]
+    fn zero_and_isotropic_matrices() {
+        let e = Sym3::default().eigen();
+        assert_eq!(e.values, [0.0; 3]);
+        assert_eq!(e.smallest_vector, [0.0, 0.0, 1.0]);
+        let iso = Sym3 {
+            xx: 2.0,
+            yy: 2.0,
+            zz: 2.0,
+            ..Sym3::default()
+        };
+        assert_eq!(iso.eigen().values, [2.0; 3]);
+    }
+
+    #[test]
+    fn collinear_covariance_gives_orthogonal_unit_vector() {
+        // Covariance of points along (1,1,1): 1/3 * ones(3x3) scaled: eigenvalues 3, 0, 0.
+        let m = Sym3 {
+            xx: 1.0,
+            xy: 1.0,
+            xz: 1.0,
+            yy: 1.0,
+            yz: 1.0,
+            zz: 1.0,
+        };
+        let e = m.eigen();
+        assert!(close(e.values[0], 3.0, 1e-12));
+        assert!(close(e.values[1], 0.0, 1e-12) && close(e.values[2], 0.0, 1e-12));
+        let v = e.smallest_vector;
+        assert!(close(dot(v, v), 1.0, 1e-12));
+        assert!(close(dot(v, [1.0, 1.0, 1.0]), 0.0, 1e-12));
+    }
+
+    #[test]
+    fn planar_covariance_gives_plane_normal() {
+        // Points spread in the plane x + y = 0 (directions (1,-1,0) and (0,0,1)):
+        // covariance u u^T + 0.5 w w^T with u = (1,-1,0)/sqrt2, w = (0,0,1).
+        let m = Sym3 {
+            xx: 0.5,
+            xy: -0.5,
+            yy: 0.5,
+            zz: 0.5,
+            ..Sym3::default()
+        };
+        let e = m.eigen();
+        assert!(close(e.values[0], 1.0, 1e-12) && close(e.values[1], 0.5, 1e-12));
+        assert!(close(e.values[2], 0.0, 1e-12));
+        let v = e.smallest_vector;
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        assert!(close(v[0].abs(), h, 1e-9) && close(v[1], v[0], 1e-9) && close(v[2], 0.0, 1e-9));
+    }
+
+    #[test]
+    fn tiny_and_huge_scales_keep_relative_accuracy() {
+        for s in [1e-30, 1e-8, 1.0, 1e8, 1e30] {
+            let m = Sym3 {
+                xx: 4.0 * s,
+                xy: s,
+                xz: 2.0 * s,
+                yy: 3.0 * s,
+                yz: 0.0,
+                zz: 5.0 * s,
+            };
+            let e = m.eigen();
+            let sum: f64 = e.values.iter().sum();
+            assert!(close(sum / s, 12.0, 1e-12), "{s}");
+            assert!(residual(&m, &e) / s < 1e-12, "{s}");
+        }
+    }
+}

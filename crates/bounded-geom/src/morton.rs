@@ -1,0 +1,78 @@
+//! Morton (Z-order) ordering of points, for spatially coherent processing.
+
+use rayon::prelude::*;
+
+/// Bits per axis of the Morton code (3 x 21 = 63 bits).
+const BITS: u32 = 21;
+
+/// Indices of `points` sorted by their Morton code on a 2^21 grid over the bounding
+/// box, ties by index. Consecutive indices are spatially close, so neighbouring
+/// queries touch the same memory.
+pub fn morton_order(points: &[[f32; 3]]) -> Vec<u32> {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in points {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let cells = f64::from((1u32 << BITS) - 1);
+    let extent = (0..3)
+        .map(|a| f64::from(hi[a]) - f64::from(lo[a]))
+        .fold(0.0, f64::max);
+    let inv = if extent > 0.0 { cells / extent } else { 0.0 };
+    let mut keyed: Vec<(u64, u32)> = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let q = [0, 1, 2].map(|a| ((f64::from(p[a]) - f64::from(lo[a])) * inv) as u64);
+            // Truncation of an index < 2^32 (checked by the caller).
+            (
+                spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2,
+                i as u32,
+            )
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// Spreads the low 21 bits of `v` so that bit `b` moves to bit `3b`.
+fn spread(v: u64) -> u64 {
+    let mut x = v & 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffff;
+    x = (x | x << 16) & 0x1f0000ff0000ff;
+    x = (x | x << 8) & 0x100f00f00f00f00f;
+    x = (x | x << 4) & 0x10c30c30c30c30c3;
+    x = (x | x << 2) & 0x1249249249249249;
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_moves_bits_to_multiples_of_three() {
+        assert_eq!(spread(0b1), 0b1);
+        assert_eq!(spread(0b11), 0b1001);
+        assert_eq!(spread(0b101), 0b1_000_001);
+        assert_eq!(spread(1 << 20), 1 << 60);
+    }
+
+    #[test]
+    fn z_order_of_a_2x2x2_cube() {
+        // Corners listed in reverse Z order; Morton order is x fastest, then y, then z.
+        let pts: Vec<[f32; 3]> = (0..8)
+            .rev()
+            .map(|c| [(c & 1) as f32, (c >> 1 & 1) as f32, (c >> 2 & 1) as f32])
+            .collect();
+        assert_eq!(morton_order(&pts), vec![7, 6, 5, 4, 3, 2, 1, 0]);
+    }
+
+    #[test]
+    fn identical_points_keep_index_order() {
+        assert_eq!(morton_order(&[[1.0; 3]; 4]), vec![0, 1, 2, 3]);
+    }
+}
