@@ -1,0 +1,448 @@
+//! The two sampling modes and their labels.
+//!
+//! * Mesh-vertex mode mimics the ABC clouds (vertices of a CAD triangulation): one row of
+//!   points exactly on every crease and border, spaced like the faces, then faces filled by
+//!   dart throwing with a minimum distance, which gives near-regular spacing. Row points take
+//!   the class of their row (sharp rows first, so sharp wins where a crease meets a border);
+//!   every other point is non-edge.
+//! * Random mode mimics the Default clouds: uniform random points on the surface. A point is
+//!   sharp when it lies within [`W_SHARP`] x the local spacing of a crease, else boundary
+//!   within [`W_BORDER`] x the local spacing of a border, else non-edge.
+//!
+//! Both modes vary the density linearly across a shape (up to 1.6 : 0.4), so the spacing
+//! differs somewhat within a shape as well as between shapes.
+
+use super::grid::Grid;
+use super::mesh::{Features, Mesh, Polyline};
+use super::vec3::{V3, add, dot, lerp, norm, normalize, scale, segment_distance, sub};
+use bounded_geom::Class;
+use rand::Rng;
+use rand_distr::StandardNormal;
+
+/// How a shape's surface is turned into points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Sampling {
+    /// Vertices of a near-regular triangulation, with one row of points on each crease and
+    /// border (the look of the ABC clouds).
+    MeshVertex,
+    /// Uniform random points with distance-band labels (the look of the Default clouds).
+    Random,
+}
+
+/// Half-width of the sharp band in random mode, in units of the local spacing
+/// `s = 1 / sqrt(points per unit area)`.
+///
+/// Calibrated on the geometry of PCEDNet's `TwoPlane90` ground truth (uniform random points,
+/// 90-degree crease): its sharp points lie within 0.31..0.33 s of the crease. The band covers
+/// both faces, so about 0.66 points per `s` of crease are sharp: one sparse row.
+pub const W_SHARP: f64 = 0.33;
+
+/// Half-width of the boundary band in random mode, in units of the local spacing: twice
+/// [`W_SHARP`] because a border has points on one side only, so it gets as many labelled
+/// points per unit length as a crease.
+pub const W_BORDER: f64 = 0.66;
+
+/// Dart-throwing fill levels: (attempts per `r^2` of surface, points per `r^2` reached with
+/// minimum distance `r`), measured on a cube. More attempts give a more regular fill.
+const FILL_LEVELS: [(f64, f64); 4] = [(2.0, 0.465), (4.0, 0.531), (7.0, 0.569), (10.0, 0.587)];
+
+/// Points and labels on the clean surface.
+pub(crate) struct Sampled {
+    /// Positions.
+    pub(crate) points: Vec<V3>,
+    /// One class per position.
+    pub(crate) labels: Vec<Class>,
+    /// A rough nearest-neighbour distance, a cell size for later spatial queries.
+    pub(crate) spacing_hint: f64,
+}
+
+/// A density that changes linearly along a random direction: `factor` is in `[1 - g, 1 + g]`.
+struct Density {
+    centre: V3,
+    direction: V3,
+    gradient: f64,
+}
+
+impl Density {
+    fn random(mesh: &Mesh, rng: &mut impl Rng) -> Self {
+        let n = mesh.vertices.len().max(1) as f64;
+        let centre = scale(
+            mesh.vertices.iter().fold([0.0; 3], |a, &v| add(a, v)),
+            1.0 / n,
+        );
+        let direction = normalize(random_direction(rng));
+        let reach = mesh
+            .vertices
+            .iter()
+            .map(|&v| dot(sub(v, centre), direction).abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let gradient = if rng.random_bool(0.4) {
+            0.0
+        } else {
+            rng.random_range(0.0..0.6)
+        };
+        Self {
+            centre,
+            direction: scale(direction, gradient / reach),
+            gradient,
+        }
+    }
+
+    fn factor(&self, p: V3) -> f64 {
+        1.0 + dot(sub(p, self.centre), self.direction)
+    }
+}
+
+/// Picks uniformly distributed points on a mesh's surface.
+struct Surface<'a> {
+    mesh: &'a Mesh,
+    cumulative: Vec<f64>,
+    /// Integral of the density factor over the surface (exact: the factor is linear).
+    weighted_area: f64,
+}
+
+impl<'a> Surface<'a> {
+    fn new(mesh: &'a Mesh, density: &Density) -> Self {
+        let mut total = 0.0;
+        let mut weighted_area = 0.0;
+        let cumulative = mesh
+            .triangles
+            .iter()
+            .map(|&t| {
+                let area = mesh.triangle_area(t);
+                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+                weighted_area += area * density.factor(scale(add(add(a, b), c), 1.0 / 3.0));
+                total += area;
+                total
+            })
+            .collect();
+        Self {
+            mesh,
+            cumulative,
+            weighted_area,
+        }
+    }
+
+    fn point(&self, rng: &mut impl Rng) -> V3 {
+        let total = self.cumulative.last().copied().unwrap_or(0.0);
+        let x = rng.random::<f64>() * total;
+        let t = self
+            .cumulative
+            .partition_point(|&c| c <= x)
+            .min(self.cumulative.len() - 1);
+        let [a, b, c] = self.mesh.triangles[t].map(|i| self.mesh.vertices[i as usize]);
+        let (r1, r2): (f64, f64) = (rng.random::<f64>().sqrt(), rng.random());
+        add(
+            add(scale(a, 1.0 - r1), scale(b, r1 * (1.0 - r2))),
+            scale(c, r1 * r2),
+        )
+    }
+}
+
+/// A uniformly distributed random direction (unnormalised Gaussian vector).
+pub(crate) fn random_direction(rng: &mut impl Rng) -> V3 {
+    loop {
+        let v: V3 = [(); 3].map(|()| rng.sample(StandardNormal));
+        if norm(v) > 1e-6 {
+            return v;
+        }
+    }
+}
+
+/// Samples about `target` points on a welded, non-empty `mesh` whose features are `features`.
+pub(crate) fn sample(
+    mesh: &Mesh,
+    features: &Features,
+    sampling: Sampling,
+    target: usize,
+    rng: &mut impl Rng,
+) -> Sampled {
+    let density = Density::random(mesh, rng);
+    let surface = Surface::new(mesh, &density);
+    match sampling {
+        Sampling::MeshVertex => mesh_vertex(&surface, &density, features, target, rng),
+        Sampling::Random => random(&surface, &density, features, target, rng),
+    }
+}
+
+fn mesh_vertex(
+    surface: &Surface,
+    density: &Density,
+    features: &Features,
+    target: usize,
+    rng: &mut impl Rng,
+) -> Sampled {
+    let (attempts_per_area, fill_density) = FILL_LEVELS[rng.random_range(0..FILL_LEVELS.len())];
+    let r0 = (fill_density * surface.weighted_area / target as f64).sqrt();
+    let radius = |p: V3| r0 / density.factor(p).sqrt();
+    let mut grid = Grid::new(r0 / (1.0 - density.gradient).sqrt());
+    let mut labels = Vec::with_capacity(target + target / 4);
+    // Crease rows are a little sparser than the minimum distance, like the face points'
+    // typical nearest-neighbour distance.
+    let row_step = rng.random_range(1.0..1.2);
+    for (class, lines) in [
+        (Class::Sharp, &features.sharp),
+        (Class::Boundary, &features.border),
+    ] {
+        for line in lines {
+            for p in resample(line, |p| row_step * radius(p)) {
+                if !grid.any_within(p, 0.5 * radius(p)) {
+                    grid.insert(p);
+                    labels.push(class);
+                }
+            }
+        }
+    }
+    let attempts = (attempts_per_area * surface.weighted_area / (r0 * r0)) as usize;
+    for _ in 0..attempts {
+        let p = surface.point(rng);
+        if !grid.any_within(p, radius(p)) {
+            grid.insert(p);
+            labels.push(Class::NonEdge);
+        }
+    }
+    Sampled {
+        points: grid.points().to_vec(),
+        labels,
+        spacing_hint: r0,
+    }
+}
+
+/// Points along a polyline, evenly spaced by arc length at about `step(p)` (measured at the
+/// polyline's middle), ends included (a loop's start once).
+fn resample(line: &Polyline, step: impl Fn(V3) -> f64) -> Vec<V3> {
+    let length = line.length();
+    let middle = point_at(line, 0.5 * length);
+    let n = (length / step(middle)).round().max(1.0) as usize;
+    let count = if line.closed { n } else { n + 1 };
+    (0..count)
+        .map(|k| point_at(line, length * k as f64 / n as f64))
+        .collect()
+}
+
+/// The point at arc length `s` along a polyline.
+fn point_at(line: &Polyline, s: f64) -> V3 {
+    let mut left = s;
+    let mut last = line.points[0];
+    for (a, b) in line.segments() {
+        let len = norm(sub(b, a));
+        if left <= len {
+            return lerp(a, b, if len > 0.0 { left / len } else { 0.0 });
+        }
+        left -= len;
+        last = b;
+    }
+    last
+}
+
+fn random(
+    surface: &Surface,
+    density: &Density,
+    features: &Features,
+    target: usize,
+    rng: &mut impl Rng,
+) -> Sampled {
+    // Points per unit area at p is target * factor(p) / weighted_area.
+    let spacing = |p: V3| (surface.weighted_area / (target as f64 * density.factor(p))).sqrt();
+    let widest = spacing_max(surface, density, target);
+    let sharp = SegmentIndex::new(&features.sharp, W_SHARP * widest);
+    let border = SegmentIndex::new(&features.border, W_BORDER * widest);
+    let mut points = Vec::with_capacity(target);
+    let mut labels = Vec::with_capacity(target);
+    while points.len() < target {
+        let p = surface.point(rng);
+        if rng.random::<f64>() * (1.0 + density.gradient) > density.factor(p) {
+            continue;
+        }
+        let s = spacing(p);
+        labels.push(if sharp.within(p, W_SHARP * s) {
+            Class::Sharp
+        } else if border.within(p, W_BORDER * s) {
+            Class::Boundary
+        } else {
+            Class::NonEdge
+        });
+        points.push(p);
+    }
+    Sampled {
+        points,
+        labels,
+        // Mean nearest-neighbour distance of uniform random points: half the spacing.
+        spacing_hint: 0.5 * (surface.weighted_area / target as f64).sqrt(),
+    }
+}
+
+fn spacing_max(surface: &Surface, density: &Density, target: usize) -> f64 {
+    (surface.weighted_area / (target as f64 * (1.0 - density.gradient))).sqrt()
+}
+
+/// Polylines cut into pieces no longer than the query radius, bucketed by their midpoints.
+struct SegmentIndex {
+    grid: Grid,
+    pieces: Vec<(V3, V3)>,
+}
+
+impl SegmentIndex {
+    /// An index answering distance queries up to `max_radius`.
+    fn new(lines: &[Polyline], max_radius: f64) -> Self {
+        // A point within max_radius of a piece is within 1.5 max_radius of its midpoint.
+        let mut grid = Grid::new(2.0 * max_radius);
+        let mut pieces = Vec::new();
+        for (a, b) in lines.iter().flat_map(Polyline::segments) {
+            let k = (norm(sub(b, a)) / max_radius).ceil().max(1.0) as usize;
+            for j in 0..k {
+                let (u, v) = (
+                    lerp(a, b, j as f64 / k as f64),
+                    lerp(a, b, (j + 1) as f64 / k as f64),
+                );
+                grid.insert(lerp(u, v, 0.5));
+                pieces.push((u, v));
+            }
+        }
+        Self { grid, pieces }
+    }
+
+    /// True when a piece passes closer than `r` to `p`.
+    fn within(&self, p: V3, r: f64) -> bool {
+        let mut hit = false;
+        self.grid.for_each_near(p, |i, _| {
+            let (a, b) = self.pieces[i as usize];
+            hit |= segment_distance(p, a, b) < r;
+        });
+        hit
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn unit_cube() -> Mesh {
+        super::super::profile::extrude(
+            &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            1.0,
+            true,
+            [true, true],
+        )
+        .welded()
+    }
+
+    /// Distance from p to the nearest of the unit cube's 12 edges.
+    fn cube_edge_distance(p: V3) -> f64 {
+        (0..3)
+            .map(|axis| {
+                let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                let du = p[u].min(1.0 - p[u]);
+                let dv = p[v].min(1.0 - p[v]);
+                du.hypot(dv)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn mesh_vertex_cube_labels_exactly_the_edge_rows() {
+        let cube = unit_cube();
+        let f = cube.features();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let s = sample(&cube, &f, Sampling::MeshVertex, 6000, &mut rng);
+        let mut sharp = 0;
+        for (p, &c) in s.points.iter().zip(&s.labels) {
+            let on_edge = cube_edge_distance(*p) < 1e-9;
+            assert_eq!(on_edge, c == Class::Sharp, "{p:?} {c:?}");
+            sharp += usize::from(on_edge);
+        }
+        // 12 unit edges with a row step of 1.0..1.2 x r0: about 12 / step points.
+        let expect = 12.0 / s.spacing_hint;
+        assert!(
+            (sharp as f64) < 1.05 * expect && (sharp as f64) > 0.75 * expect,
+            "{sharp} vs {expect}"
+        );
+        // No face point comes closer to an edge than half the minimum distance.
+        let min_face = s
+            .points
+            .iter()
+            .zip(&s.labels)
+            .filter(|(_, c)| **c == Class::NonEdge)
+            .map(|(p, _)| cube_edge_distance(*p))
+            .fold(f64::INFINITY, f64::min);
+        assert!(min_face > 0.3 * s.spacing_hint, "{min_face}");
+        // The count is near the target (fill density calibration).
+        let n = s.points.len() as f64;
+        assert!(n > 0.75 * 6000.0 && n < 1.3 * 6000.0, "{n}");
+    }
+
+    #[test]
+    fn random_cube_labels_a_band_of_a_third_spacing() {
+        let cube = unit_cube();
+        let f = cube.features();
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let s = sample(&cube, &f, Sampling::Random, 6000, &mut rng);
+        assert_eq!(s.points.len(), 6000);
+        // The local spacing is at most sqrt(6 / (6000 * 0.4)) = 0.05.
+        let max_band = W_SHARP * 0.05;
+        for (p, &c) in s.points.iter().zip(&s.labels) {
+            let d = cube_edge_distance(*p);
+            if c == Class::Sharp {
+                assert!(d < max_band, "{d}");
+            }
+            assert_ne!(c, Class::Boundary);
+        }
+        // Every point closer than the smallest possible band (spacing >= sqrt(6/(6000*1.6)))
+        // is sharp.
+        let min_band = W_SHARP * (6.0 / (6000.0 * 1.6_f64)).sqrt();
+        for (p, &c) in s.points.iter().zip(&s.labels) {
+            if cube_edge_distance(*p) < min_band {
+                assert_eq!(c, Class::Sharp);
+            }
+        }
+    }
+
+    #[test]
+    fn disc_border_points_are_boundary_and_only_they() {
+        let disc = super::super::profile::revolve(
+            &[[0.0, 0.0], [1.0, 0.0]],
+            72,
+            std::f64::consts::TAU,
+            false,
+        )
+        .welded();
+        let f = disc.features();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let s = sample(&disc, &f, Sampling::MeshVertex, 3000, &mut rng);
+        // The border is the 72-gon inscribed in the unit circle: its points have radius in
+        // [cos(2.5 deg), 1].
+        let inner = (2.5_f64).to_radians().cos();
+        let mut boundary = 0;
+        for (p, &c) in s.points.iter().zip(&s.labels) {
+            let r = p[0].hypot(p[1]);
+            assert_ne!(c, Class::Sharp);
+            if c == Class::Boundary {
+                boundary += 1;
+                assert!(r >= inner - 1e-9 && r <= 1.0 + 1e-9, "{r}");
+            } else {
+                assert!(r < 1.0 - 0.3 * s.spacing_hint, "{r}");
+            }
+        }
+        let expect = std::f64::consts::TAU / s.spacing_hint;
+        assert!((boundary as f64) > 0.75 * expect, "{boundary} vs {expect}");
+    }
+
+    #[test]
+    fn sphere_has_no_edge_points_in_either_mode() {
+        use std::f64::consts::{FRAC_PI_2, TAU};
+        let arc = super::super::profile::arc([0.0, 0.0], 1.0, -FRAC_PI_2, FRAC_PI_2);
+        let sphere = super::super::profile::revolve(&arc, 72, TAU, false).welded();
+        let f = sphere.features();
+        for sampling in [Sampling::MeshVertex, Sampling::Random] {
+            let mut rng = ChaCha8Rng::seed_from_u64(4);
+            let s = sample(&sphere, &f, sampling, 2000, &mut rng);
+            assert!(
+                s.labels.iter().all(|&c| c == Class::NonEdge),
+                "{sampling:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,510 @@
+//! The shape catalogue: every kind builds a mesh of size about 1 around the origin.
+//!
+//! Generated creases deviate from flat by at least [`MIN_CREASE_DEG`], well above the sharp
+//! threshold, and smooth parts turn by at most [`ARC_STEP_DEG`](super::profile::ARC_STEP_DEG)
+//! per edge, so no label hinges on rounding.
+
+use super::mesh::Mesh;
+use super::profile::{P2, arc, extrude, revolve, round_corners, star_polygon};
+use super::vec3::{V3, segment_distance};
+use rand::Rng;
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+/// Corners of random profiles turning less than this (degrees) are rounded into fillets.
+const MIN_CREASE_DEG: f64 = 25.0;
+
+/// Segments of a full revolution: 5 degrees per edge, far below the sharp threshold.
+const ROUND_SEGMENTS: usize = 72;
+
+/// One kind of generated shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ShapeKind {
+    /// A box of random aspect (three-face corners, 90-degree creases).
+    Box,
+    /// A box with smaller boxes stuck on and dented into its faces, recursively.
+    FractalCube,
+    /// A staircase (alternating convex and concave creases).
+    Stairs,
+    /// An extruded random polygon (creases of many angles).
+    Prism,
+    /// A triangular prism whose apex angle is anywhere in 20..155 degrees (convex creases).
+    Wedge,
+    /// A block with a V-notch of random opening (a concave crease).
+    Notch,
+    /// A pyramid or frustum with a 3- to 8-gon base.
+    Frustum,
+    /// A revolved random profile mixing sharp and rounded (smooth) circles.
+    Lathe,
+    /// A capped cylinder (sharp rims, smooth side).
+    Cylinder,
+    /// A cone with its base (sharp rim, smooth side and apex).
+    Cone,
+    /// A sphere (smooth everywhere).
+    Sphere,
+    /// A torus (smooth everywhere).
+    Torus,
+    /// An extruded polygon with fillets of several radii along its vertical edges.
+    RoundedPrism,
+    /// An open sheet folded along one to three creases, some rounded (borders and creases).
+    FoldedSheet,
+    /// A flat disc or annulus (curved borders).
+    Disc,
+    /// A flat polygon, possibly with a hole (straight and curved borders).
+    PolygonSheet,
+    /// An open cylinder, full or partial (curved and straight borders).
+    Tube,
+    /// An open spherical cap (a curved border on a smooth surface).
+    Bowl,
+    /// A box without its top (a border on a sharp rim).
+    OpenBox,
+    /// A plate much thinner than the point spacing: boundary at its rim, as in the paper.
+    ThinPlate,
+}
+
+impl ShapeKind {
+    /// Every kind, in a fixed order.
+    pub const ALL: [ShapeKind; 20] = [
+        ShapeKind::Box,
+        ShapeKind::FractalCube,
+        ShapeKind::Stairs,
+        ShapeKind::Prism,
+        ShapeKind::Wedge,
+        ShapeKind::Notch,
+        ShapeKind::Frustum,
+        ShapeKind::Lathe,
+        ShapeKind::Cylinder,
+        ShapeKind::Cone,
+        ShapeKind::Sphere,
+        ShapeKind::Torus,
+        ShapeKind::RoundedPrism,
+        ShapeKind::FoldedSheet,
+        ShapeKind::Disc,
+        ShapeKind::PolygonSheet,
+        ShapeKind::Tube,
+        ShapeKind::Bowl,
+        ShapeKind::OpenBox,
+        ShapeKind::ThinPlate,
+    ];
+
+    /// Snake-case name, used in generated cloud names.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShapeKind::Box => "box",
+            ShapeKind::FractalCube => "fractal_cube",
+            ShapeKind::Stairs => "stairs",
+            ShapeKind::Prism => "prism",
+            ShapeKind::Wedge => "wedge",
+            ShapeKind::Notch => "notch",
+            ShapeKind::Frustum => "frustum",
+            ShapeKind::Lathe => "lathe",
+            ShapeKind::Cylinder => "cylinder",
+            ShapeKind::Cone => "cone",
+            ShapeKind::Sphere => "sphere",
+            ShapeKind::Torus => "torus",
+            ShapeKind::RoundedPrism => "rounded_prism",
+            ShapeKind::FoldedSheet => "folded_sheet",
+            ShapeKind::Disc => "disc",
+            ShapeKind::PolygonSheet => "polygon_sheet",
+            ShapeKind::Tube => "tube",
+            ShapeKind::Bowl => "bowl",
+            ShapeKind::OpenBox => "open_box",
+            ShapeKind::ThinPlate => "thin_plate",
+        }
+    }
+
+    /// True for shapes with open borders (their points include the boundary class).
+    pub fn is_open(self) -> bool {
+        matches!(
+            self,
+            ShapeKind::FoldedSheet
+                | ShapeKind::Disc
+                | ShapeKind::PolygonSheet
+                | ShapeKind::Tube
+                | ShapeKind::Bowl
+                | ShapeKind::OpenBox
+                | ShapeKind::ThinPlate
+        )
+    }
+
+    /// Builds a random instance (unwelded, untransformed).
+    pub(crate) fn build(self, rng: &mut impl Rng) -> Mesh {
+        match self {
+            ShapeKind::Box => {
+                let (a, b) = (rng.random_range(0.3..1.0), rng.random_range(0.3..1.0));
+                let rect = [[0.0, 0.0], [a, 0.0], [a, b], [0.0, b]];
+                extrude(&rect, rng.random_range(0.3..1.0), true, [true, true])
+            }
+            ShapeKind::FractalCube => {
+                let mut m = Mesh::default();
+                let depth = rng.random_range(1..=2);
+                box_faces(&mut m, [0.0; 3], [0.5; 3], depth, None, rng);
+                m
+            }
+            ShapeKind::Stairs => {
+                extrude(&stairs(rng), rng.random_range(0.4..1.2), true, [true, true])
+            }
+            ShapeKind::Prism => {
+                let corners = rng.random_range(3..=9);
+                let poly = crease_safe(&star_polygon(rng, corners), true);
+                extrude(&poly, rng.random_range(0.2..1.2), true, [true, true])
+            }
+            ShapeKind::Wedge => {
+                let half = rng.random_range(20.0_f64..155.0).to_radians() / 2.0;
+                let reach = rng.random_range(0.4..1.0);
+                let tri = [
+                    [0.0, 0.0],
+                    [reach * half.cos(), reach * half.sin()],
+                    [reach * half.cos(), -reach * half.sin()],
+                ];
+                extrude(&tri, rng.random_range(0.3..1.0), true, [true, true])
+            }
+            ShapeKind::Notch => {
+                extrude(&notch(rng), rng.random_range(0.3..1.0), true, [true, true])
+            }
+            ShapeKind::Frustum => {
+                let (r, h) = (rng.random_range(0.3..0.6), rng.random_range(0.3..1.0));
+                let top = rng.random_range(0.0..0.9) * r;
+                let profile: Vec<P2> = if top < 0.1 * r {
+                    vec![[0.0, 0.0], [r, 0.0], [0.0, h]]
+                } else {
+                    vec![[0.0, 0.0], [r, 0.0], [top, h], [0.0, h]]
+                };
+                revolve(&profile, rng.random_range(3..=8), TAU, false)
+            }
+            ShapeKind::Lathe => revolve(&lathe_profile(rng), ROUND_SEGMENTS, TAU, false),
+            ShapeKind::Cylinder => {
+                let (r, h) = (rng.random_range(0.15..0.5), rng.random_range(0.3..1.0));
+                revolve(
+                    &[[0.0, 0.0], [r, 0.0], [r, h], [0.0, h]],
+                    ROUND_SEGMENTS,
+                    TAU,
+                    false,
+                )
+            }
+            ShapeKind::Cone => {
+                let (r, h) = (rng.random_range(0.2..0.5), rng.random_range(0.3..1.0));
+                revolve(
+                    &[[0.0, 0.0], [r, 0.0], [0.0, h]],
+                    ROUND_SEGMENTS,
+                    TAU,
+                    false,
+                )
+            }
+            ShapeKind::Sphere => {
+                let r = rng.random_range(0.3..0.6);
+                revolve(
+                    &arc([0.0, 0.0], r, -FRAC_PI_2, FRAC_PI_2),
+                    ROUND_SEGMENTS,
+                    TAU,
+                    false,
+                )
+            }
+            ShapeKind::Torus => {
+                let big = rng.random_range(0.3..0.5);
+                let small = rng.random_range(0.2..0.8) * big;
+                let mut ring = arc([big, 0.0], small, 0.0, TAU);
+                ring.pop(); // the arc repeats its start; the closed profile joins it instead
+                revolve(&ring, ROUND_SEGMENTS, TAU, true)
+            }
+            ShapeKind::RoundedPrism => {
+                let corners = rng.random_range(3..=7);
+                let poly = star_polygon(rng, corners);
+                let rounded = round_corners(&poly, true, |_| {
+                    [0.03, 0.08, 0.15, 0.3][rng.random_range(0..4)]
+                });
+                extrude(&rounded, rng.random_range(0.2..1.0), true, [true, true])
+            }
+            ShapeKind::FoldedSheet => {
+                let profile = folded_profile(rng);
+                extrude(&profile, rng.random_range(0.4..1.2), false, [false, false])
+            }
+            ShapeKind::Disc => {
+                let r = rng.random_range(0.3..0.6);
+                let inner = if rng.random_bool(0.5) {
+                    0.0
+                } else {
+                    rng.random_range(0.2..0.7) * r
+                };
+                revolve(&[[inner, 0.0], [r, 0.0]], ROUND_SEGMENTS, TAU, false)
+            }
+            ShapeKind::PolygonSheet => polygon_sheet(rng),
+            ShapeKind::Tube => {
+                let (r, h) = (rng.random_range(0.2..0.5), rng.random_range(0.3..1.0));
+                let sweep = if rng.random_bool(0.5) {
+                    TAU
+                } else {
+                    rng.random_range(0.5 * PI..1.7 * PI)
+                };
+                let segments = (ROUND_SEGMENTS as f64 * sweep / TAU).ceil() as usize;
+                revolve(&[[r, 0.0], [r, h]], segments, sweep, false)
+            }
+            ShapeKind::Bowl => {
+                let r = rng.random_range(0.3..0.6);
+                let rim = rng.random_range(-0.3..0.6);
+                revolve(
+                    &arc([0.0, 0.0], r, -FRAC_PI_2, rim),
+                    ROUND_SEGMENTS,
+                    TAU,
+                    false,
+                )
+            }
+            ShapeKind::OpenBox => {
+                let (a, b) = (rng.random_range(0.3..1.0), rng.random_range(0.3..1.0));
+                let rect = [[0.0, 0.0], [a, 0.0], [a, b], [0.0, b]];
+                extrude(&rect, rng.random_range(0.2..0.8), true, [true, false])
+            }
+            ShapeKind::ThinPlate => {
+                let mut m = polygon_sheet(rng);
+                let thickness = rng.random_range(0.002..0.008);
+                let mut other = m.clone();
+                other.map(|[x, y, z]| [x, y, z + thickness]);
+                m.append(&other);
+                m
+            }
+        }
+    }
+}
+
+/// Rounds the corners of a random profile that turn less than [`MIN_CREASE_DEG`], so every
+/// remaining corner is an unambiguous crease.
+fn crease_safe(poly: &[P2], closed: bool) -> Vec<P2> {
+    round_corners(
+        poly,
+        closed,
+        |turn| if turn < MIN_CREASE_DEG { 0.1 } else { 0.0 },
+    )
+}
+
+/// A staircase profile of 2..6 steps of random tread and rise.
+fn stairs(rng: &mut impl Rng) -> Vec<P2> {
+    let steps = rng.random_range(2..=6);
+    let mut profile = vec![[0.0, 0.0]];
+    let (mut x, mut y) = (0.0, 0.0);
+    for _ in 0..steps {
+        y += rng.random_range(0.08..0.25);
+        profile.push([x, y]);
+        x += rng.random_range(0.1..0.3);
+        profile.push([x, y]);
+    }
+    profile.push([x, 0.0]);
+    profile
+}
+
+/// A block with a V-notch cut into its top; the notch's rim corners stay clear of the
+/// sharp threshold (opening at most 130 degrees).
+fn notch(rng: &mut impl Rng) -> Vec<P2> {
+    let (w, h): (f64, f64) = (rng.random_range(0.6..1.0), rng.random_range(0.4..0.8));
+    let half = rng.random_range(20.0_f64..130.0).to_radians() / 2.0;
+    let depth = (0.6 * h).min(0.4 * w / half.tan());
+    let spread = depth * half.tan();
+    let mid = w / 2.0 + rng.random_range(-0.05..0.05) * w;
+    vec![
+        [0.0, 0.0],
+        [w, 0.0],
+        [w, h],
+        [mid + spread, h],
+        [mid, h - depth],
+        [mid - spread, h],
+        [0.0, h],
+    ]
+}
+
+/// A `(radius, z)` profile from the bottom pole to the top pole through 2..5 random
+/// radii; each corner is either kept sharp or filleted with a random radius.
+fn lathe_profile(rng: &mut impl Rng) -> Vec<P2> {
+    let knots = rng.random_range(2..=5);
+    let mut profile = vec![[0.0, 0.0]];
+    let mut z = 0.0;
+    for i in 0..knots {
+        if i > 0 {
+            z += rng.random_range(0.1..0.4);
+        }
+        profile.push([rng.random_range(0.15..0.5), z]);
+    }
+    profile.push([0.0, z]);
+    round_corners(&profile, false, |turn| {
+        if turn < MIN_CREASE_DEG || rng.random_bool(0.4) {
+            [0.02, 0.05, 0.1][rng.random_range(0..3)]
+        } else {
+            0.0
+        }
+    })
+}
+
+/// An open polyline with 1..3 folds whose deviation from flat is 25..165 degrees, either
+/// sign; some folds are rounded into curved sheets.
+fn folded_profile(rng: &mut impl Rng) -> Vec<P2> {
+    let folds = rng.random_range(1..=3);
+    let mut heading: f64 = 0.0;
+    let mut p = [0.0, 0.0];
+    let mut profile = vec![p];
+    for i in 0..=folds {
+        if i > 0 {
+            let turn = rng.random_range(MIN_CREASE_DEG..165.0).to_radians();
+            heading += if rng.random_bool(0.5) { turn } else { -turn };
+        }
+        let len = rng.random_range(0.3..0.8);
+        p = [p[0] + len * heading.cos(), p[1] + len * heading.sin()];
+        profile.push(p);
+    }
+    round_corners(&profile, false, |_| {
+        if rng.random_bool(0.25) { 0.15 } else { 0.0 }
+    })
+}
+
+/// A flat star polygon in the z = 0 plane, possibly with a round or polygonal hole.
+fn polygon_sheet(rng: &mut impl Rng) -> Mesh {
+    let corners = rng.random_range(3..=8);
+    let outer = star_polygon(rng, corners);
+    let outer = if rng.random_bool(0.3) {
+        round_corners(&outer, true, |_| 0.1)
+    } else {
+        outer
+    };
+    let mut m = Mesh::default();
+    let ring = m.vertices_of(outer.iter().map(|p| [p[0], p[1], 0.0]));
+    if rng.random_bool(0.5) {
+        let centre = m.vertex([0.0; 3]);
+        m.fan(centre, &ring);
+        return m;
+    }
+    // The hole follows the outer outline's angles, so the two rings pair up into quads; it
+    // stays within the largest circle inside the outline (a square hole within its inscribed
+    // square's diagonal).
+    let inside = (0..outer.len())
+        .map(|i| {
+            let (a, b) = (outer[i], outer[(i + 1) % outer.len()]);
+            segment_distance([0.0; 3], [a[0], a[1], 0.0], [b[0], b[1], 0.0])
+        })
+        .fold(f64::INFINITY, f64::min);
+    let hole_radius = rng.random_range(0.2..0.6) * inside / std::f64::consts::SQRT_2;
+    let square = rng.random_bool(0.5);
+    let hole = m.vertices_of(outer.iter().map(|p| {
+        let t = p[1].atan2(p[0]);
+        let r = if square {
+            // A square hole: radius of the square's outline along direction t.
+            hole_radius / t.cos().abs().max(t.sin().abs())
+        } else {
+            hole_radius
+        };
+        [r * t.cos(), r * t.sin(), 0.0]
+    }));
+    m.strip(&ring, &hole, true);
+    m
+}
+
+/// Adds the faces of an axis-aligned box (except face `skip`) and, while `depth` lasts,
+/// smaller boxes stuck on or dented into some faces.
+///
+/// Face `2 * axis + s` is the face on the `axis` side with sign `-1` (s = 0) or `+1`.
+/// A face carrying a child is a ring of four quads around the child's footprint, so the
+/// child's walls share its edges: the concave creases come out of the mesh like all others.
+/// Footprints keep clear of the face border, so children of one box never intersect.
+fn box_faces(
+    m: &mut Mesh,
+    centre: V3,
+    half: V3,
+    depth: u32,
+    skip: Option<usize>,
+    rng: &mut impl Rng,
+) {
+    const SQUARE: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    for face in 0..6 {
+        if skip == Some(face) {
+            continue;
+        }
+        let (axis, sign) = (face / 2, if face % 2 == 0 { -1.0 } else { 1.0 });
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let at = |du: f64, dv: f64, dn: f64| {
+            let mut p = centre;
+            p[axis] += sign * (half[axis] + dn);
+            p[u] += du;
+            p[v] += dv;
+            p
+        };
+        let outer = m.vertices_of(SQUARE.map(|[a, b]| at(a * half[u], b * half[v], 0.0)));
+        if depth == 0 || !rng.random_bool(0.6) {
+            m.quad(outer[0], outer[1], outer[2], outer[3]);
+            continue;
+        }
+        let dent = rng.random_bool(0.3);
+        // Dents stay within 60% of the face so dents of neighbouring faces never meet
+        // inside the box; bumps may use 90%.
+        let reach = if dent { 0.6 } else { 0.9 };
+        let hu = half[u] * rng.random_range(0.15..0.35);
+        let hv = half[v] * rng.random_range(0.15..0.35);
+        let ou = rng.random_range(-1.0..1.0) * (reach * half[u] - hu).max(0.0);
+        let ov = rng.random_range(-1.0..1.0) * (reach * half[v] - hv).max(0.0);
+        let hn = if dent {
+            half[axis] * rng.random_range(0.1..0.3)
+        } else {
+            half[u].min(half[v]) * rng.random_range(0.15..0.35)
+        };
+        let inner = m.vertices_of(SQUARE.map(|[a, b]| at(ou + a * hu, ov + b * hv, 0.0)));
+        m.strip(&outer, &inner, true);
+        let mut child_half = [0.0; 3];
+        child_half[axis] = hn;
+        child_half[u] = hu;
+        child_half[v] = hv;
+        let out = if dent { -hn } else { hn };
+        let toward_parent = 2 * axis + usize::from(sign < 0.0);
+        let opening = 2 * axis + usize::from(sign > 0.0);
+        let (child_skip, child_depth) = if dent {
+            (opening, 0)
+        } else {
+            (toward_parent, depth - 1)
+        };
+        box_faces(
+            m,
+            at(ou, ov, out),
+            child_half,
+            child_depth,
+            Some(child_skip),
+            rng,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn every_kind_builds_a_mesh_with_the_expected_feature_classes() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for kind in ShapeKind::ALL {
+            for _ in 0..5 {
+                let m = kind.build(&mut rng).welded();
+                assert!(!m.triangles.is_empty(), "{kind:?}");
+                let f = m.features();
+                assert_eq!(!f.border.is_empty(), kind.is_open(), "{kind:?} borders");
+                let smooth = matches!(
+                    kind,
+                    ShapeKind::Sphere
+                        | ShapeKind::Torus
+                        | ShapeKind::Disc
+                        | ShapeKind::Tube
+                        | ShapeKind::Bowl
+                        | ShapeKind::PolygonSheet
+                        | ShapeKind::ThinPlate
+                );
+                if smooth {
+                    assert!(f.sharp.is_empty(), "{kind:?} has sharp edges");
+                } else if kind != ShapeKind::FoldedSheet {
+                    assert!(!f.sharp.is_empty(), "{kind:?} has no sharp edge");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fractal_cube_is_closed() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..20 {
+            let m = ShapeKind::FractalCube.build(&mut rng).welded();
+            assert!(m.features().border.is_empty());
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! Small `f64` 3-vector helpers: the generator builds geometry in `f64` and converts once at the end.
+
+/// A point or direction in 3D.
+pub(crate) type V3 = [f64; 3];
+
+pub(crate) fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+pub(crate) fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub(crate) fn scale(a: V3, s: f64) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+pub(crate) fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+pub(crate) fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+pub(crate) fn norm(a: V3) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// `a / |a|`, or zero for a zero vector (callers treat zero as "no direction").
+pub(crate) fn normalize(a: V3) -> V3 {
+    let n = norm(a);
+    if n > 0.0 { scale(a, 1.0 / n) } else { [0.0; 3] }
+}
+
+/// `a + t (b - a)`.
+pub(crate) fn lerp(a: V3, b: V3, t: f64) -> V3 {
+    add(a, scale(sub(b, a), t))
+}
+
+/// Distance from `p` to the segment `a`-`b`.
+pub(crate) fn segment_distance(p: V3, a: V3, b: V3) -> f64 {
+    let ab = sub(b, a);
+    let len2 = dot(ab, ab);
+    let t = if len2 > 0.0 {
+        (dot(sub(p, a), ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    norm(sub(p, lerp(a, b, t)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segment_distance_inside_and_beyond_the_ends() {
+        let (a, b) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0]);
+        assert_eq!(segment_distance([1.0, 3.0, 0.0], a, b), 3.0);
+        assert_eq!(segment_distance([5.0, 4.0, 0.0], a, b), 5.0);
+        assert_eq!(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
+    }
+}
