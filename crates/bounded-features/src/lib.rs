@@ -1,1 +1,45 @@
-//! Placeholder: filled in by its issue.
+//! BoundED's multi-scale local neighbourhood statistics.
+//!
+//! For every point and every scale `k` (neighbour count, the point included) the
+//! neighbourhood is centred and scaled to a unit-free frame, split by its normal into
+//! an upper and a lower set, and described by 12 numbers: `sigma_u` (3), `sigma_l` (3),
+//! `d` (2), `s` (2), `c` (2). See `SPEC.md`, "Features", and [`FeatureGroups`].
+//!
+//! Choices the paper leaves open, as implemented here:
+//! - covariances are population covariances (divided by the count), accumulated in
+//!   `f64` on coordinates centred on the query point;
+//! - the normalisation factor `2 / (sqrt(s1) + sqrt(s2))` falls back to 1 when it is not
+//!   finite (all neighbours identical), so output is always finite;
+//! - the normal is oriented so the query point lies on its upper side, and, when the
+//!   query point lies exactly in the plane, so its first non-zero component is positive;
+//! - the normal of `floor(k/2) = 0` points (k = 1) and of fully degenerate
+//!   neighbourhoods is `[0, 0, 1]`; sets with fewer than 2 points have zero `sigma`,
+//!   and `d` is zero when either set is empty.
+//!
+//! ```
+//! use bounded_features::{FeatureConfig, FeatureGroups, extract};
+//! use bounded_geom::PointCloud;
+//!
+//! // A 12 x 12 grid on the plane z = 0, with absolute coordinates.
+//! let positions: Vec<[f64; 3]> = (0..144)
+//!     .map(|i| [1000.0 + (i % 12) as f64, 2000.0 + (i / 12) as f64, 5.0])
+//!     .collect();
+//! let cloud = PointCloud::from_f64(&positions).unwrap();
+//! let config = FeatureConfig { scales: vec![32, 16], groups: FeatureGroups::BOUNDED };
+//! let features = extract(&cloud, &config).unwrap();
+//!
+//! // Point 78 = (6, 6): 2 scales x 12 values; on a plane it has no offset along the
+//! // normal (s_perp, the 11th value of a scale).
+//! let x = features.point(78);
+//! assert_eq!(x.len(), 2 * 12);
+//! assert!(x[10].abs() < 1e-6 && x[12 + 10].abs() < 1e-6);
+//! ```
+
+mod config;
+mod error;
+mod extract;
+mod local;
+
+pub use config::{DEFAULT_SCALES, FeatureConfig, FeatureGroups};
+pub use error::FeatureError;
+pub use extract::{DEFAULT_CHUNK_POINTS, FeatureBlock, Features, extract, extract_chunks};

@@ -1,0 +1,22 @@
+use bounded_geom::GeomError;
+use thiserror::Error;
+
+/// Errors of feature extraction.
+#[derive(Debug, Error, PartialEq)]
+pub enum FeatureError {
+    /// The cloud or its neighbourhood search failed (e.g. fewer points than the
+    /// largest scale).
+    #[error(transparent)]
+    Geom(#[from] GeomError),
+    /// The scale list is unusable.
+    #[error("invalid scales {scales:?}: {reason}")]
+    InvalidScales {
+        /// The scales given.
+        scales: Vec<usize>,
+        /// What is wrong with them.
+        reason: &'static str,
+    },
+    /// No feature group is selected.
+    #[error("no feature group selected: at least one of the groups must be on")]
+    NoFeatureGroups,
+}

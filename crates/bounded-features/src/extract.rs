@@ -1,0 +1,148 @@
+//! Feature extraction over a whole cloud, streamed in Morton-ordered blocks.
+
+use bounded_geom::{KnnIndex, PointCloud};
+use rayon::prelude::*;
+
+use crate::local::{Scratch, point_features};
+use crate::{FeatureConfig, FeatureError};
+
+/// Points per block of [`extract`]: 16384 x 128 neighbours x 4 B = 8 MiB of
+/// neighbour lists at the default scales.
+pub const DEFAULT_CHUNK_POINTS: usize = 16_384;
+
+/// Features of a whole cloud, dense `f32`.
+///
+/// Layout: `[point][scale][feature]`, points in the cloud's original order, scales
+/// largest first, features in [`FeatureGroups`](crate::FeatureGroups) order restricted
+/// to the selected groups. With the defaults: 4 scales x 12 = 48 values per point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Features {
+    per_point: usize,
+    values: Vec<f32>,
+}
+
+impl Features {
+    /// Values per point (scales x features per scale).
+    pub fn per_point(&self) -> usize {
+        self.per_point
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.values.len() / self.per_point
+    }
+
+    /// True for no points (never, for a constructed cloud).
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// The values of point `i` (scales x features).
+    pub fn point(&self, i: usize) -> &[f32] {
+        &self.values[i * self.per_point..(i + 1) * self.per_point]
+    }
+
+    /// All values, row-major.
+    pub fn as_slice(&self) -> &[f32] {
+        &self.values
+    }
+
+    /// All values, row-major, without copying.
+    pub fn into_vec(self) -> Vec<f32> {
+        self.values
+    }
+}
+
+/// Features of a run of points, as handed out by [`extract_chunks`].
+#[derive(Debug, Clone, Default)]
+pub struct FeatureBlock {
+    per_point: usize,
+    points: Vec<u32>,
+    values: Vec<f32>,
+}
+
+impl FeatureBlock {
+    /// Cloud indices of the block's points (Morton order).
+    pub fn points(&self) -> &[u32] {
+        &self.points
+    }
+
+    /// Number of points in the block.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True for a block without points (never handed out).
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Values per point, as in [`Features`].
+    pub fn per_point(&self) -> usize {
+        self.per_point
+    }
+
+    /// Values of the block's `row`-th point (cloud index `points()[row]`).
+    pub fn row(&self, row: usize) -> &[f32] {
+        &self.values[row * self.per_point..(row + 1) * self.per_point]
+    }
+
+    /// All values, row-major in block order (`len() x per_point()`).
+    pub fn values(&self) -> &[f32] {
+        &self.values
+    }
+}
+
+/// Extracts features for every point of `cloud`; see [`Features`] for the layout.
+///
+/// Built on [`extract_chunks`]; the result does not depend on chunking or thread count.
+pub fn extract(cloud: &PointCloud, config: &FeatureConfig) -> Result<Features, FeatureError> {
+    let per_point = config.features_per_point();
+    let mut values = vec![0.0; cloud.len() * per_point];
+    extract_chunks(cloud, config, DEFAULT_CHUNK_POINTS, |block| {
+        for (row, &i) in block.points().iter().enumerate() {
+            let i = i as usize;
+            values[i * per_point..(i + 1) * per_point].copy_from_slice(block.row(row));
+        }
+    })?;
+    Ok(Features { per_point, values })
+}
+
+/// Streams the features of every point of `cloud` to `f`, in blocks of at most
+/// `chunk_points` points (Morton order; 0 counts as 1), each point exactly once.
+///
+/// Memory is `O(chunk_points x (k0 + values per point))` beyond the cloud and its
+/// search index, so huge clouds can be classified block by block. Each block is
+/// computed in parallel on the current rayon pool; `f` runs on the calling thread.
+pub fn extract_chunks(
+    cloud: &PointCloud,
+    config: &FeatureConfig,
+    chunk_points: usize,
+    mut f: impl FnMut(&FeatureBlock),
+) -> Result<(), FeatureError> {
+    config.validate()?;
+    let index = KnnIndex::new(cloud)?;
+    let k0 = config.largest_scale();
+    let points = cloud.points();
+    let mut block = FeatureBlock {
+        per_point: config.features_per_point(),
+        ..FeatureBlock::default()
+    };
+    index.for_each_chunk(k0, chunk_points, |chunk| {
+        block.points.clear();
+        block.points.extend_from_slice(chunk.queries());
+        block.values.resize(chunk.len() * block.per_point, 0.0);
+        block
+            .values
+            .par_chunks_mut(block.per_point)
+            .zip(chunk.rows().par_chunks(k0))
+            .for_each_init(
+                || Scratch::new(k0),
+                |scratch, (out, neighbours)| {
+                    point_features(points, neighbours, config, scratch, out)
+                },
+            );
+        f(&block);
+    })?;
+    Ok(())
+}

@@ -1,0 +1,367 @@
+//! Hand-checkable behaviour of the BoundED features.
+//!
+//! Index helpers name the 12 BoundED values of a scale: sigma_u 0..3, sigma_l 3..6,
+//! d_perp 6, d_par 7, s_perp 8, s_par 9, c_perp 10, c_par 11.
+
+use bounded_features::{
+    FeatureConfig, FeatureError, FeatureGroups, Features, extract, extract_chunks,
+};
+use bounded_geom::{GeomError, PointCloud};
+
+const D_PERP: usize = 6;
+const S_PERP: usize = 8;
+const S_PAR: usize = 9;
+const C_PERP: usize = 10;
+const C_PAR: usize = 11;
+
+/// SplitMix64 in [0, 1): deterministic test data without a dependency.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        (z ^ (z >> 31)) as f64 / 2f64.powi(64)
+    }
+    /// Uniform in [-a, a).
+    fn sym(&mut self, a: f64) -> f64 {
+        a * (2.0 * self.next() - 1.0)
+    }
+}
+
+fn config(scales: &[usize]) -> FeatureConfig {
+    FeatureConfig {
+        scales: scales.to_vec(),
+        groups: FeatureGroups::BOUNDED,
+    }
+}
+
+fn run(points: &[[f64; 3]], scales: &[usize]) -> Features {
+    extract(&PointCloud::from_f64(points).unwrap(), &config(scales)).unwrap()
+}
+
+/// A jittered `n x n` grid of unit spacing on z = f(x, y), with z noise `noise`;
+/// point `i` sits at grid cell (i % n, i / n), centred on the origin.
+fn surface(n: usize, noise: f64, seed: u64, f: impl Fn(f64, f64) -> f64) -> Vec<[f64; 3]> {
+    let mut rng = Rng(seed);
+    let h = (n as f64 - 1.0) / 2.0;
+    (0..n * n)
+        .map(|i| {
+            let x = (i % n) as f64 - h + rng.sym(0.1);
+            let y = (i / n) as f64 - h + rng.sym(0.1);
+            [x, y, f(x, y) + rng.sym(noise)]
+        })
+        .collect()
+}
+
+/// Index of the grid point at cell (cx, cy) of an `n x n` grid.
+fn cell(n: usize, cx: usize, cy: usize) -> usize {
+    cy * n + cx
+}
+
+#[test]
+fn symmetric_grid_exact_values() {
+    // 3x3 grid, k = 9 around the centre: centroid = query, s1 = s2 = 6/9, so the
+    // normalised variances are exactly (1, 1, 0); all points lie in the plane, so all
+    // belong to U (<p, n> = 0 counts as upper) and L is empty.
+    let pts: Vec<[f64; 3]> = (0..9)
+        .map(|i| [(i % 3) as f64, (i / 3) as f64, 0.0])
+        .collect();
+    let cfg = FeatureConfig {
+        scales: vec![9],
+        groups: FeatureGroups {
+            sigma: true,
+            ..FeatureGroups::BOUNDED
+        },
+    };
+    let f = extract(&PointCloud::from_f64(&pts).unwrap(), &cfg).unwrap();
+    let x = f.point(4);
+    let want = [
+        1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    ];
+    for (i, (g, w)) in x.iter().zip(want).enumerate() {
+        assert!((g - w).abs() < 1e-6, "value {i}: {g} != {w} in {x:?}");
+    }
+}
+
+#[test]
+fn flat_disc() {
+    // A noisy plane. At k0 = 128 the U / L split is by noise, so both halves span the
+    // disc: normalised in-plane variances near 1 (a uniform disc of radius 2 has
+    // variance 1 per axis). At small k the half-neighbourhood's normal tilts by about
+    // the noise over the radius, which then decides the split, so sigma_U and sigma_L
+    // are only compared at k0. At every scale the normal variance, d_perp and s_perp
+    // vanish and the query sits near the centroid.
+    let n = 24;
+    let pts = surface(n, 0.01, 1, |_, _| 0.0);
+    let f = run(&pts, &[128, 64, 32, 16]);
+    let x = f.point(cell(n, 12, 12));
+    let (su, sl) = (&x[0..3], &x[3..6]);
+    assert!(
+        su[0] > 0.7 && su[0] < 1.3 && sl[0] > 0.7 && sl[0] < 1.3,
+        "{x:?}"
+    );
+    assert!(
+        (su[0] - sl[0]).abs() < 0.25 && (su[1] - sl[1]).abs() < 0.25,
+        "{x:?}"
+    );
+    for s in 0..4 {
+        let v = &x[s * 12..(s + 1) * 12];
+        assert!(v[2] < 0.01 && v[5] < 0.01, "{v:?}");
+        assert!(v[D_PERP].abs() < 0.05, "d_perp {v:?}");
+        assert!(v[S_PERP].abs() < 0.05 && v[S_PAR] < 0.3, "s {v:?}");
+    }
+}
+
+#[test]
+fn ridge_point_versus_flat_point() {
+    // Roof z = -|y|: two planes meeting at 90 degrees along the x axis. On the ridge
+    // the centroid sits 4R/(3 pi) ~ 0.42 R below the query and s1 ~ s2 ~ R^2/4 (R the
+    // neighbourhood radius in xy), so s_perp ~ 0.85; the upper set (near the ridge) is
+    // well above the lower set. Far from the ridge the surface is flat.
+    let n = 40;
+    let pts = surface(n, 0.005, 2, |_, y| -y.abs());
+    // Rows are y; the ridge y = 0 runs between rows 19 and 20 of the jittered grid, so
+    // use an exact ridge point by snapping one point onto it.
+    let mut pts = pts;
+    let ridge = cell(n, 20, 20);
+    pts[ridge] = [pts[ridge][0], 0.0, 0.0];
+    let far = cell(n, 20, 34);
+    let f = run(&pts, &[64, 32, 16]);
+    let (xr, xf) = (f.point(ridge), f.point(far));
+    for s in 0..3 {
+        let (r, q) = (&xr[s * 12..], &xf[s * 12..]);
+        assert!(
+            r[S_PERP] > 0.6 && r[S_PERP] < 1.1,
+            "ridge s_perp {}",
+            r[S_PERP]
+        );
+        assert!(q[S_PERP].abs() < 0.05, "flat s_perp {}", q[S_PERP]);
+        assert!(r[D_PERP] > 0.3, "ridge d_perp {}", r[D_PERP]);
+        assert!(q[D_PERP].abs() < 0.05, "flat d_perp {}", q[D_PERP]);
+        // U is the band along the ridge, L the two slopes beyond: their second
+        // variances (across the ridge) differ clearly.
+        assert!(
+            r[4] - r[1] > 0.3,
+            "ridge sigma_u2 {} sigma_l2 {}",
+            r[1],
+            r[4]
+        );
+    }
+}
+
+#[test]
+fn half_plane_border_has_large_s_par() {
+    // Half-disc neighbourhood: centroid 4R/(3 pi) from the border point, s1 = R^2/4,
+    // s2 = R^2/4 - (4R/(3 pi))^2, so s_par ~ 0.42 * 2 / (0.5 + 0.265) ~ 1.1.
+    let n = 30;
+    let pts: Vec<[f64; 3]> = surface(n, 0.01, 3, |_, _| 0.0)
+        .into_iter()
+        .filter(|p| p[1] > 0.0)
+        .collect();
+    let cloud = PointCloud::from_f64(&pts).unwrap();
+    let f = extract(&cloud, &config(&[64, 32])).unwrap();
+    let nearest = |x: f64, y: f64| {
+        (0..pts.len())
+            .min_by(|&a, &b| {
+                let d = |i: usize| (pts[i][0] - x).powi(2) + (pts[i][1] - y).powi(2);
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap()
+    };
+    let (border, inner) = (f.point(nearest(0.5, 0.5)), f.point(nearest(0.5, 7.5)));
+    for s in 0..2 {
+        let (b, i) = (&border[s * 12..], &inner[s * 12..]);
+        assert!(
+            b[S_PAR] > 0.8 && b[S_PAR] < 1.4,
+            "border s_par {}",
+            b[S_PAR]
+        );
+        assert!(i[S_PAR] < 0.3, "inner s_par {}", i[S_PAR]);
+    }
+}
+
+#[test]
+fn outlier_above_a_plane_has_large_s_perp() {
+    // 16 neighbours on a unit grid span R ~ 2.3, so scale ~ 2 / R ~ 0.9; an outlier 3
+    // above the plane has s_perp ~ 3 * 15/16 * 0.9 ~ 2.5, a plane point ~ 0.
+    let n = 20;
+    let mut pts = surface(n, 0.0, 4, |_, _| 0.0);
+    pts.push([0.0, 0.0, 3.0]);
+    let f = run(&pts, &[16]);
+    let out = f.point(pts.len() - 1);
+    let plane = f.point(cell(n, 3, 3));
+    assert!(
+        out[S_PERP] > 1.8 && out[S_PERP] < 3.5,
+        "outlier s_perp {}",
+        out[S_PERP]
+    );
+    assert!(plane[S_PERP].abs() < 0.01, "plane s_perp {}", plane[S_PERP]);
+}
+
+#[test]
+fn c_detects_a_nearby_crease() {
+    // A point 2.4 from the ridge: its 16 nearest (radius ~2.3) lie on its own slope, but the
+    // 128 neighbourhood reaches over the ridge, so the small neighbourhood's centroid
+    // is off the rest of the big one along the big one's normal. On a flat region c
+    // stays in the plane; at k0 it is zero by definition.
+    let n = 40;
+    let pts = surface(n, 0.005, 5, |_, y| -y.abs());
+    let f = run(&pts, &[128, 16]);
+    let near = f.point(cell(n, 20, 22));
+    let flat = {
+        let flat_pts = surface(n, 0.005, 5, |_, y| -y);
+        run(&flat_pts, &[128, 16]).point(cell(n, 20, 22)).to_vec()
+    };
+    assert_eq!((near[C_PERP], near[C_PAR]), (0.0, 0.0));
+    let (cn, cf) = (near[12 + C_PERP], flat[12 + C_PERP]);
+    assert!(cn.abs() > 0.1, "near crease c_perp {cn}");
+    assert!(cf.abs() < 0.02, "flat c_perp {cf}");
+    assert!(near[12 + C_PAR] > 0.0);
+}
+
+/// Number of points whose features differ by more than `tol` anywhere.
+fn differing_points(a: &Features, b: &Features, tol: f32) -> usize {
+    (0..a.len())
+        .filter(|&i| {
+            a.point(i)
+                .iter()
+                .zip(b.point(i))
+                .any(|(x, y)| (x - y).abs() > tol)
+        })
+        .count()
+}
+
+#[test]
+fn invariant_under_translation_rotation_and_scale() {
+    // The clouds differ only by f32 rounding of the transformed coordinates (~1e-7
+    // relative). Features are O(1) and continuous except where a neighbour lies on the
+    // U / L split plane (within rounding, ~1 in 10^4 point-neighbour pairs here), which
+    // moves it between the sets. So: at most 1% of the points may differ by more than
+    // 1e-3.
+    let n = 20;
+    let pts = surface(n, 0.02, 6, |x, y| 0.05 * (x * x - 0.5 * y * y));
+    let scales = [64, 32, 16];
+    let base = run(&pts, &scales);
+    let (c, s) = (0.6f64.cos(), 0.6f64.sin());
+    let (c2, s2) = (1.1f64.cos(), 1.1f64.sin());
+    type Transform = Box<dyn Fn([f64; 3]) -> [f64; 3]>;
+    let transforms: [(&str, Transform); 3] = [
+        (
+            "translate",
+            Box::new(|p| [p[0] + 5_403_150.25, p[1] - 77.5, p[2] + 1e3]),
+        ),
+        (
+            "rotate",
+            Box::new(move |p| {
+                let q = [c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]];
+                [q[0], c2 * q[1] - s2 * q[2], s2 * q[1] + c2 * q[2]]
+            }),
+        ),
+        ("scale", Box::new(|p| p.map(|v| v * 1234.5))),
+    ];
+    for (name, t) in transforms {
+        let moved: Vec<_> = pts.iter().map(|&p| t(p)).collect();
+        let d = differing_points(&base, &run(&moved, &scales), 1e-3);
+        assert!(d <= pts.len() / 100, "{name}: {d} points differ");
+    }
+    let tiny: Vec<_> = pts.iter().map(|p| p.map(|v| v * 1e-12)).collect();
+    let d = differing_points(&base, &run(&tiny, &scales), 1e-3);
+    assert!(d <= pts.len() / 100, "tiny coordinates: {d} points differ");
+}
+
+#[test]
+fn smaller_scales_are_prefixes_of_the_largest() {
+    // A scale's sigma, d and s do not depend on which larger scales are computed.
+    let n = 16;
+    let pts = surface(n, 0.05, 7, |x, _| 0.1 * x * x);
+    let both = run(&pts, &[64, 16]);
+    let alone = run(&pts, &[16]);
+    for i in 0..pts.len() {
+        assert_eq!(
+            &both.point(i)[12..12 + 10],
+            &alone.point(i)[..10],
+            "point {i}"
+        );
+    }
+}
+
+#[test]
+fn identical_whatever_the_chunking_and_thread_count() {
+    let n = 18;
+    let pts = surface(n, 0.05, 8, |x, y| 0.2 * (x * y).sin());
+    let cloud = PointCloud::from_f64(&pts).unwrap();
+    let cfg = config(&[32, 8]);
+    let reference = extract(&cloud, &cfg).unwrap();
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for chunk in [1, 37, 100_000] {
+            let mut got = vec![f32::NAN; reference.as_slice().len()];
+            let mut seen = 0;
+            pool.install(|| {
+                extract_chunks(&cloud, &cfg, chunk, |b| {
+                    assert!(b.len() <= chunk);
+                    for (r, &i) in b.points().iter().enumerate() {
+                        let i = i as usize;
+                        got[i * 24..(i + 1) * 24].copy_from_slice(b.row(r));
+                        seen += 1;
+                    }
+                })
+            })
+            .unwrap();
+            assert_eq!(seen, pts.len());
+            assert!(
+                got.iter()
+                    .zip(reference.as_slice())
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "threads {threads}, chunk {chunk}"
+            );
+        }
+    }
+}
+
+#[test]
+fn degenerate_clouds_give_finite_features() {
+    let same = run(&[[3.0, -2.0, 1e6]; 40], &[32, 8]);
+    assert!(
+        same.as_slice().iter().all(|&v| v == 0.0),
+        "{:?}",
+        same.point(0)
+    );
+    let line: Vec<_> = (0..40)
+        .map(|i| [i as f64, 2.0 * i as f64, -(i as f64)])
+        .collect();
+    let f = run(&line, &[32, 8]);
+    assert!(f.as_slice().iter().all(|v| v.is_finite()));
+    // A line is normalised by its only spread: variances along it are 4 (s2 = 0).
+    let x = f.point(20);
+    assert!((x[0] + x[3] - 4.0).abs() < 0.5 * 4.0, "{x:?}");
+    let dup: Vec<_> = (0..60)
+        .map(|i| [(i % 3) as f64, 0.0, ((i / 3) % 2) as f64])
+        .collect();
+    assert!(run(&dup, &[32, 4]).as_slice().iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn clear_errors() {
+    assert!(matches!(
+        PointCloud::from_f64(&[[0.0; 3], [f64::NAN, 1.0, 2.0]]),
+        Err(GeomError::NonFinite { index: 1, .. })
+    ));
+    assert!(PointCloud::from_f64(&[[f64::INFINITY, 1.0, 2.0]]).is_err());
+    let small = PointCloud::from_f64(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).unwrap();
+    let e = extract(&small, &FeatureConfig::default()).unwrap_err();
+    assert_eq!(
+        e,
+        FeatureError::Geom(GeomError::TooFewPoints { points: 3, k: 128 })
+    );
+    assert!(e.to_string().contains("3 points") && e.to_string().contains("128"));
+    assert!(matches!(
+        extract(&small, &config(&[2, 3])),
+        Err(FeatureError::InvalidScales { .. })
+    ));
+}
