@@ -75,28 +75,40 @@ impl Grid {
         &self.points
     }
 
-    /// Calls `visit(index, distance)` for every stored point in the 27 cells around `p`.
-    pub(crate) fn for_each_near(&self, p: V3, mut visit: impl FnMut(u32, f64)) {
+    /// Calls `visit(index, distance)` for stored points in the 27 cells around `p`, the
+    /// query point's own cell first, until `visit` returns `true`; returns whether it did.
+    pub(crate) fn search_near(&self, p: V3, mut visit: impl FnMut(u32, f64) -> bool) -> bool {
         let c = self.coords(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
+        // The own cell first: a rejected dart usually hits there, and stops the search.
+        const ORDER: [i64; 3] = [0, -1, 1];
+        for dx in ORDER {
+            for dy in ORDER {
+                for dz in ORDER {
                     let key = Self::key([c[0] + dx, c[1] + dy, c[2] + dz]);
                     let mut i = self.heads.get(&key).copied().unwrap_or(NONE);
                     while i != NONE {
-                        visit(i, norm(sub(self.points[i as usize], p)));
+                        if visit(i, norm(sub(self.points[i as usize], p))) {
+                            return true;
+                        }
                         i = self.next[i as usize];
                     }
                 }
             }
         }
+        false
+    }
+
+    /// Calls `visit(index, distance)` for every stored point in the 27 cells around `p`.
+    pub(crate) fn for_each_near(&self, p: V3, mut visit: impl FnMut(u32, f64)) {
+        self.search_near(p, |i, d| {
+            visit(i, d);
+            false
+        });
     }
 
     /// True when a stored point lies closer than `r` (at most the cell size) to `p`.
     pub(crate) fn any_within(&self, p: V3, r: f64) -> bool {
-        let mut found = false;
-        self.for_each_near(p, |_, d| found |= d < r);
-        found
+        self.search_near(p, |_, d| d < r)
     }
 
     /// Distance to the nearest stored point other than `p` itself, if one lies within the cell size.

@@ -305,12 +305,10 @@ impl SegmentIndex {
 
     /// True when a piece passes closer than `r` to `p`.
     fn within(&self, p: V3, r: f64) -> bool {
-        let mut hit = false;
-        self.grid.for_each_near(p, |i, _| {
+        self.grid.search_near(p, |i, _| {
             let (a, b) = self.pieces[i as usize];
-            hit |= segment_distance(p, a, b) < r;
-        });
-        hit
+            segment_distance(p, a, b) < r
+        })
     }
 }
 
