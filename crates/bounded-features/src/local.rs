@@ -24,15 +24,80 @@ impl Scratch {
     }
 }
 
-/// A neighbourhood's normalised frame: centroid, scale factor and oriented normal.
-struct Frame {
-    mean: [f64; 3],
-    /// `2 / (sqrt(s1) + sqrt(s2))`, or 1 when that is not finite (all points equal).
-    scale: f64,
-    /// Unit normal with `<p^_i, n> >= 0`.
-    normal: [f64; 3],
-    /// Eigenvalues of the covariance, descending, clamped at 0.
-    variances: [f64; 3],
+/// Count, sum and sum of outer products of points (relative to the query point, so
+/// the one-pass covariance loses only ~1e-16 of the neighbourhood's squared radius).
+#[derive(Clone, Copy, Default)]
+struct Moments {
+    n: usize,
+    sum: [f64; 3],
+    outer: Sym3,
+}
+
+impl Moments {
+    fn add(&mut self, q: [f64; 3]) {
+        self.n += 1;
+        for a in 0..3 {
+            self.sum[a] += q[a];
+        }
+        let o = &mut self.outer;
+        o.xx += q[0] * q[0];
+        o.xy += q[0] * q[1];
+        o.xz += q[0] * q[2];
+        o.yy += q[1] * q[1];
+        o.yz += q[1] * q[2];
+        o.zz += q[2] * q[2];
+    }
+
+    fn of(pts: impl Iterator<Item = [f64; 3]>) -> Self {
+        let mut m = Self::default();
+        pts.for_each(|q| m.add(q));
+        m
+    }
+
+    /// The moments of the points in `self` but not in `part`.
+    fn minus(&self, part: &Self) -> Self {
+        let (a, b) = (&self.outer, &part.outer);
+        Self {
+            n: self.n - part.n,
+            sum: [0, 1, 2].map(|i| self.sum[i] - part.sum[i]),
+            outer: Sym3 {
+                xx: a.xx - b.xx,
+                xy: a.xy - b.xy,
+                xz: a.xz - b.xz,
+                yy: a.yy - b.yy,
+                yz: a.yz - b.yz,
+                zz: a.zz - b.zz,
+            },
+        }
+    }
+
+    /// Mean (zero for no points).
+    fn mean(&self) -> [f64; 3] {
+        self.sum.map(|c| c / self.n.max(1) as f64)
+    }
+
+    /// Population covariance (divided by the count).
+    fn covariance(&self) -> Sym3 {
+        let inv = 1.0 / self.n.max(1) as f64;
+        let m = self.mean();
+        let o = &self.outer;
+        Sym3 {
+            xx: o.xx * inv - m[0] * m[0],
+            xy: o.xy * inv - m[0] * m[1],
+            xz: o.xz * inv - m[0] * m[2],
+            yy: o.yy * inv - m[1] * m[1],
+            yz: o.yz * inv - m[1] * m[2],
+            zz: o.zz * inv - m[2] * m[2],
+        }
+    }
+
+    /// Eigenvalues of the covariance, descending, clamped at 0; zeros below 2 points.
+    fn variances(&self) -> [f64; 3] {
+        if self.n < 2 {
+            return [0.0; 3];
+        }
+        self.covariance().eigenvalues().map(|v| v.max(0.0))
+    }
 }
 
 /// Writes the selected features of every scale for the point `neighbours[0]`, whose
@@ -51,47 +116,61 @@ pub(crate) fn point_features(
         let q = points[j as usize];
         [0, 1, 2].map(|a| f64::from(q[a]) - p[a])
     }));
-    let k0 = neighbours.len();
-    let mut largest: Option<Frame> = None;
+    let local = &scratch.local;
+    let whole = Moments::of(local.iter().copied());
+    let mut largest: Option<(Moments, Frame)> = None;
     let per_scale = config.features_per_scale();
     for (&k, out) in config.scales.iter().zip(out.chunks_exact_mut(per_scale)) {
-        let frame = frame(&scratch.local[..k], &mut scratch.near_centroid);
-        let mut all = scale_features(&scratch.local[..k], &frame);
-        if let Some(f0) = &largest {
+        let moments = if k == whole.n {
+            whole
+        } else {
+            Moments::of(local[..k].iter().copied())
+        };
+        let frame = frame(&local[..k], &moments, &mut scratch.near_centroid);
+        let mut all = scale_features(&local[..k], &moments, &frame);
+        if let Some((m0, f0)) = &largest {
             // c: this scale's centroid against the rest of the k0 neighbourhood,
             // in the k0 frame.
-            let rest = mean(&scratch.local[k..k0]);
+            let rest = m0.minus(&moments).mean();
             let c = [0, 1, 2].map(|a| (frame.mean[a] - rest[a]) * f0.scale);
             [all[13], all[14]] = split(c, f0.normal);
         }
         for (o, i) in out.iter_mut().zip(config.groups.selected()) {
             *o = all[i] as f32;
         }
-        largest.get_or_insert(frame);
+        largest.get_or_insert((moments, frame));
     }
 }
 
+/// A neighbourhood's normalised frame: centroid, scale factor and oriented normal.
+struct Frame {
+    mean: [f64; 3],
+    /// `2 / (sqrt(s1) + sqrt(s2))`, or 1 when that is not finite (all points equal).
+    scale: f64,
+    /// Unit normal with `<p^_i, n> >= 0`.
+    normal: [f64; 3],
+    /// Eigenvalues of the covariance, descending, clamped at 0.
+    variances: [f64; 3],
+}
+
 /// Centroid, normalisation and oriented normal of `pts` (relative to the query point,
-/// which is therefore the origin).
-fn frame(pts: &[[f64; 3]], near_centroid: &mut Vec<(f64, u32)>) -> Frame {
-    let m = mean(pts);
-    let variances = covariance(pts.iter().copied(), m)
-        .eigenvalues()
-        .map(|v| v.max(0.0));
+/// which is therefore the origin), whose moments are `moments`.
+fn frame(pts: &[[f64; 3]], moments: &Moments, near_centroid: &mut Vec<(f64, u32)>) -> Frame {
+    let m = moments.mean();
+    let variances = moments.variances();
     let scale = 2.0 / (variances[0].sqrt() + variances[1].sqrt());
     let scale = if scale.is_finite() { scale } else { 1.0 };
     // Normal from the floor(k/2) points closest to the centroid: robust to outliers.
     let half = pts.len() / 2;
-    near_centroid.clear();
-    near_centroid.extend(pts.iter().zip(0u32..).map(|(q, j)| (dist2(*q, m), j)));
     let raw = if half == 0 {
         [0.0, 0.0, 1.0]
     } else {
+        near_centroid.clear();
+        near_centroid.extend(pts.iter().zip(0u32..).map(|(q, j)| (dist2(*q, m), j)));
         near_centroid
             .select_nth_unstable_by(half - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let near = &near_centroid[..half];
-        let nm = mean_of(near.iter().map(|&(_, j)| pts[j as usize]), half);
-        covariance(near.iter().map(|&(_, j)| pts[j as usize]), nm)
+        Moments::of(near_centroid[..half].iter().map(|&(_, j)| pts[j as usize]))
+            .covariance()
             .eigen()
             .smallest_vector
     };
@@ -119,40 +198,26 @@ pub(crate) fn orient(n: [f64; 3], s: [f64; 3]) -> [f64; 3] {
 }
 
 /// The 15 values of one scale (all groups, `c` left at 0) in the normalised frame.
-fn scale_features(pts: &[[f64; 3]], f: &Frame) -> [f64; ALL_FEATURES] {
+///
+/// U holds the points with `<p - m, n> >= 0` (the sign of `<p^, n>`, as the scale
+/// factor is positive); L the rest, whose moments are the whole set's minus U's.
+fn scale_features(pts: &[[f64; 3]], moments: &Moments, f: &Frame) -> [f64; ALL_FEATURES] {
     let mut all = [0.0; ALL_FEATURES];
     let s2 = f.scale * f.scale;
     all[..3].copy_from_slice(&f.variances.map(|v| v * s2));
-    let normalised = pts
-        .iter()
-        .map(|q| [0, 1, 2].map(|a| (q[a] - f.mean[a]) * f.scale));
-    let upper = |v: &[f64; 3]| dot(*v, f.normal) >= 0.0;
-    // Two passes: means of U and L, then their covariances around those means.
-    let (mut sum_u, mut sum_l, mut n_u) = ([0.0; 3], [0.0; 3], 0usize);
-    for v in normalised.clone() {
-        let (sum, up) = if upper(&v) {
-            (&mut sum_u, true)
-        } else {
-            (&mut sum_l, false)
-        };
-        n_u += usize::from(up);
-        for a in 0..3 {
-            sum[a] += v[a];
-        }
-    }
-    let n_l = pts.len() - n_u;
-    let mean_u = sum_u.map(|c| c / n_u.max(1) as f64);
-    let mean_l = sum_l.map(|c| c / n_l.max(1) as f64);
-    if n_u >= 2 {
-        let cov = covariance(normalised.clone().filter(upper), mean_u);
-        all[3..6].copy_from_slice(&cov.eigenvalues().map(|v| v.max(0.0)));
-    }
-    if n_l >= 2 {
-        let cov = covariance(normalised.clone().filter(|v| !upper(v)), mean_l);
-        all[6..9].copy_from_slice(&cov.eigenvalues().map(|v| v.max(0.0)));
-    }
-    if n_u > 0 && n_l > 0 {
-        [all[9], all[10]] = split([0, 1, 2].map(|a| mean_u[a] - mean_l[a]), f.normal);
+    // <q - m, n> >= 0  <=>  <q, n> >= <m, n>
+    let threshold = dot(f.mean, f.normal);
+    let upper = Moments::of(
+        pts.iter()
+            .copied()
+            .filter(|q| dot(*q, f.normal) >= threshold),
+    );
+    let lower = moments.minus(&upper);
+    all[3..6].copy_from_slice(&upper.variances().map(|v| v * s2));
+    all[6..9].copy_from_slice(&lower.variances().map(|v| v * s2));
+    if upper.n > 0 && lower.n > 0 {
+        let (mu, ml) = (upper.mean(), lower.mean());
+        [all[9], all[10]] = split([0, 1, 2].map(|a| (mu[a] - ml[a]) * f.scale), f.normal);
     }
     // The query point is the origin of `pts`.
     [all[11], all[12]] = split(f.mean.map(|c| -c * f.scale), f.normal);
@@ -164,46 +229,6 @@ fn split(v: [f64; 3], n: [f64; 3]) -> [f64; 2] {
     let along = dot(v, n);
     let rest = [0, 1, 2].map(|a| v[a] - along * n[a]);
     [along, dot(rest, rest).sqrt()]
-}
-
-fn mean(pts: &[[f64; 3]]) -> [f64; 3] {
-    mean_of(pts.iter().copied(), pts.len())
-}
-
-/// Mean of `len` points (zero for none).
-fn mean_of(pts: impl Iterator<Item = [f64; 3]>, len: usize) -> [f64; 3] {
-    let mut s = [0.0; 3];
-    for q in pts {
-        for a in 0..3 {
-            s[a] += q[a];
-        }
-    }
-    s.map(|c| c / len.max(1) as f64)
-}
-
-/// Population covariance (divided by the count) of `pts` around `m`.
-fn covariance(pts: impl Iterator<Item = [f64; 3]>, m: [f64; 3]) -> Sym3 {
-    let mut c = Sym3::default();
-    let mut n = 0usize;
-    for q in pts {
-        let d = [q[0] - m[0], q[1] - m[1], q[2] - m[2]];
-        c.xx += d[0] * d[0];
-        c.xy += d[0] * d[1];
-        c.xz += d[0] * d[2];
-        c.yy += d[1] * d[1];
-        c.yz += d[1] * d[2];
-        c.zz += d[2] * d[2];
-        n += 1;
-    }
-    let inv = 1.0 / n.max(1) as f64;
-    Sym3 {
-        xx: c.xx * inv,
-        xy: c.xy * inv,
-        xz: c.xz * inv,
-        yy: c.yy * inv,
-        yz: c.yz * inv,
-        zz: c.zz * inv,
-    }
 }
 
 fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {

@@ -171,7 +171,9 @@ impl<'a> KnnIndex<'a> {
                     r.item,
                 )
             }));
-            cand.sort_unstable_by(|a, b| neighbour_order(*a, *b));
+            // kiddo sorts by distance already: only ties and the query's own place
+            // move, so an insertion sort is linear here.
+            insertion_sort(cand);
             if want == n || cand[k - 1].1 < cand[want - 1].1 {
                 break;
             }
@@ -179,6 +181,17 @@ impl<'a> KnnIndex<'a> {
         }
         for (o, c) in out.iter_mut().zip(cand.iter()) {
             *o = c.2;
+        }
+    }
+}
+
+/// Sorts by [`neighbour_order`]; fast on nearly sorted input.
+fn insertion_sort(v: &mut [(bool, f32, u32)]) {
+    for i in 1..v.len() {
+        let mut j = i;
+        while j > 0 && neighbour_order(v[j - 1], v[j]).is_gt() {
+            v.swap(j - 1, j);
+            j -= 1;
         }
     }
 }
