@@ -4,13 +4,12 @@ use burn::prelude::*;
 
 use crate::NnError;
 
-/// Burn's CPU device used for training and for Burn-side evaluation.
-///
-/// burn 0.22 marks its NdArray backend deprecated in favour of Flex; the workspace pins the
-/// `ndarray` feature, so the choice is isolated here.
-#[allow(deprecated)]
+/// Burn's CPU device used for training and for Burn-side evaluation: Flex, burn 0.22's
+/// pure-Rust CPU backend (NdArray is deprecated there). Measured on the 2-core machine with the
+/// default network at batch 16384: 0.034 s per training iteration with Flex against 0.100 s
+/// with NdArray (both with SIMD and rayon enabled).
 pub fn cpu_device() -> Device {
-    Device::ndarray()
+    Device::flex()
 }
 
 /// Reads a float tensor back as a flat row-major vector.

@@ -162,7 +162,8 @@ pub fn train(
             model = optim.step(config.learning_rate, model, grads);
             let loss = scalar(loss)?;
 
-            let validate = iteration.is_multiple_of(config.val_every) || iteration == config.iterations;
+            let validate =
+                iteration.is_multiple_of(config.val_every) || iteration == config.iterations;
             let val_loss = match (&validation, validate) {
                 (Some((vx, vy)), true) => {
                     let eval = model.valid();
@@ -284,7 +285,7 @@ pub(crate) mod tests {
             .forward(x)
             .argmax(1)
             .into_data()
-            .try_into_vec::<i64>()
+            .try_into_vec_as::<i64>()
             .unwrap();
         let correct = predicted
             .iter()

@@ -1,0 +1,280 @@
+//! The self-describing model file.
+//!
+//! Layout: the 8 magic bytes `BOUNDED\0`, the format version as a little-endian `u32`, then
+//! the [`ModelFile`] as MessagePack with field names (rmp-serde). The version sits outside the
+//! MessagePack body so that a file of another version is reported as such rather than as a
+//! decoding error.
+
+use std::path::Path;
+
+use burn::tensor::Device;
+use serde::{Deserialize, Serialize};
+
+use crate::{
+    CLASS_NAMES, LayerWeights, Model, ModelConfig, NnError, Standardisation, TrainedModel,
+};
+
+/// First bytes of every model file.
+pub const MAGIC: [u8; 8] = *b"BOUNDED\0";
+
+/// The format version this build reads and writes.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// Where a model came from: enough to reproduce it and to recognise its training data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The command line that trained it (given by the caller).
+    pub command: String,
+    /// Training seed.
+    pub seed: u64,
+    /// [`crate::Dataset::fingerprint`] of the training data.
+    pub data_hash: u64,
+    /// Validation loss of the kept weights.
+    pub val_loss: f32,
+    /// Iterations per run.
+    pub iterations: usize,
+    /// Runs, of which the best was kept.
+    pub runs: usize,
+    /// Batch size.
+    pub batch_size: usize,
+}
+
+/// A trained network with everything needed to use and to trace it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// Network shape.
+    pub model: ModelConfig,
+    /// Neighbourhood sizes of the scales, largest first (informational; given by the caller).
+    pub scales: Vec<usize>,
+    /// Names of the features of one scale, in input order (given by the caller).
+    pub feature_names: Vec<String>,
+    /// Names of the output classes, in code order.
+    pub class_names: Vec<String>,
+    /// Input standardisation applied before the first layer.
+    pub standardisation: Standardisation,
+    /// Training command, seed and data hash.
+    pub provenance: Provenance,
+    /// Weights of every layer in [`ModelConfig::layer_shapes`] order.
+    pub layers: Vec<LayerWeights>,
+}
+
+impl ModelFile {
+    /// Packs a trained model. `scales` must have one entry per scale and `feature_names` one
+    /// per feature of a scale; `command` is recorded as given.
+    pub fn from_trained(
+        trained: &TrainedModel,
+        scales: Vec<usize>,
+        feature_names: Vec<String>,
+        command: String,
+    ) -> Result<Self, NnError> {
+        let config = &trained.config;
+        let file = Self {
+            model: config.model.clone(),
+            scales,
+            feature_names,
+            class_names: CLASS_NAMES.iter().map(|s| s.to_string()).collect(),
+            standardisation: trained.standardisation.clone(),
+            provenance: Provenance {
+                command,
+                seed: config.seed,
+                data_hash: trained.data_hash,
+                val_loss: trained.val_loss,
+                iterations: config.iterations,
+                runs: config.runs,
+                batch_size: config.batch_size,
+            },
+            layers: trained.model.export_weights()?,
+        };
+        file.validate()?;
+        Ok(file)
+    }
+
+    /// Checks that every stored size agrees with the configuration and that all numbers are
+    /// finite.
+    pub fn validate(&self) -> Result<(), NnError> {
+        let bad = |msg: String| Err(NnError::InconsistentModel(msg));
+        self.model.validate()?;
+        self.model.check_weights(&self.layers)?;
+        if self.scales.len() != self.model.n_scales {
+            return bad(format!(
+                "{} scales listed for {} model scales",
+                self.scales.len(),
+                self.model.n_scales
+            ));
+        }
+        if self.feature_names.len() != self.model.features_per_scale {
+            return bad(format!(
+                "{} feature names for {} features per scale",
+                self.feature_names.len(),
+                self.model.features_per_scale
+            ));
+        }
+        if self.class_names.len() != CLASS_NAMES.len() {
+            return bad(format!(
+                "{} class names, expected {}",
+                self.class_names.len(),
+                CLASS_NAMES.len()
+            ));
+        }
+        let std = &self.standardisation;
+        if std.mean.len() != self.model.n_inputs() || std.std.len() != self.model.n_inputs() {
+            return bad(format!(
+                "standardisation of {}/{} inputs for {} model inputs",
+                std.mean.len(),
+                std.std.len(),
+                self.model.n_inputs()
+            ));
+        }
+        if std.std.iter().any(|&s| s <= 0.0) {
+            return bad("non-positive standard deviation".into());
+        }
+        let numbers = self
+            .layers
+            .iter()
+            .flat_map(|l| l.weight.iter().chain(&l.bias));
+        if !numbers
+            .chain(&std.mean)
+            .chain(&std.std)
+            .all(|v| v.is_finite())
+        {
+            return bad("non-finite weight or standardisation value".into());
+        }
+        Ok(())
+    }
+
+    /// Encodes the file (magic, version, MessagePack body).
+    pub fn to_bytes(&self) -> Result<Vec<u8>, NnError> {
+        let mut bytes = MAGIC.to_vec();
+        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        bytes.extend(rmp_serde::to_vec_named(self)?);
+        Ok(bytes)
+    }
+
+    /// Decodes and validates a file.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, NnError> {
+        let body = bytes.strip_prefix(&MAGIC).ok_or(NnError::BadMagic)?;
+        let (version, body) = body.split_first_chunk::<4>().ok_or(NnError::BadMagic)?;
+        let found = u32::from_le_bytes(*version);
+        if found != FORMAT_VERSION {
+            return Err(NnError::UnsupportedVersion {
+                found,
+                expected: FORMAT_VERSION,
+            });
+        }
+        let file: Self = rmp_serde::from_slice(body)?;
+        file.validate()?;
+        Ok(file)
+    }
+
+    /// Writes the file to `path`.
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<(), NnError> {
+        Ok(std::fs::write(path, self.to_bytes()?)?)
+    }
+
+    /// Reads and validates the file at `path`.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, NnError> {
+        Self::from_bytes(&std::fs::read(path)?)
+    }
+
+    /// The Burn model with these weights on `device` (for further training or checks).
+    pub fn to_burn(&self, device: &Device) -> Result<Model, NnError> {
+        self.model.init(&self.standardisation, &self.layers, device)
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand::rngs::StdRng;
+
+    /// A valid file with random weights for `n_scales` x `fps` inputs.
+    pub(crate) fn random_file(n_scales: usize, fps: usize, seed: u64) -> ModelFile {
+        let model = ModelConfig::new(n_scales, fps);
+        let layers = model.random_weights(&mut StdRng::seed_from_u64(seed));
+        let n = model.n_inputs();
+        ModelFile {
+            scales: (0..n_scales).map(|i| 128 >> i).collect(),
+            feature_names: (0..fps).map(|i| format!("f{i}")).collect(),
+            class_names: CLASS_NAMES.iter().map(|s| s.to_string()).collect(),
+            standardisation: Standardisation {
+                mean: (0..n).map(|i| i as f32 * 0.1).collect(),
+                std: (0..n).map(|i| 0.5 + i as f32 * 0.05).collect(),
+            },
+            provenance: Provenance {
+                command: "test".into(),
+                seed,
+                data_hash: 42,
+                val_loss: 0.1,
+                iterations: 1,
+                runs: 1,
+                batch_size: 1,
+            },
+            layers,
+            model,
+        }
+    }
+
+    #[test]
+    fn round_trips_through_bytes() {
+        let file = random_file(4, 12, 1);
+        let bytes = file.to_bytes().unwrap();
+        assert_eq!(&bytes[..8], b"BOUNDED\0");
+        assert_eq!(ModelFile::from_bytes(&bytes).unwrap(), file);
+    }
+
+    #[test]
+    fn wrong_magic_and_version_are_clear_errors() {
+        let mut bytes = random_file(2, 6, 1).to_bytes().unwrap();
+        bytes[8] = 99;
+        assert!(matches!(
+            ModelFile::from_bytes(&bytes),
+            Err(NnError::UnsupportedVersion {
+                found: 99,
+                expected: FORMAT_VERSION
+            })
+        ));
+        assert!(matches!(
+            ModelFile::from_bytes(b"PLY\n..."),
+            Err(NnError::BadMagic)
+        ));
+        assert!(matches!(
+            ModelFile::from_bytes(&bytes[..10]),
+            Err(NnError::BadMagic)
+        ));
+    }
+
+    #[test]
+    fn inconsistent_shapes_are_rejected() {
+        let mut file = random_file(4, 12, 1);
+        file.layers[1].bias.pop();
+        assert!(matches!(
+            ModelFile::from_bytes(&file.to_bytes().unwrap()),
+            Err(NnError::InconsistentModel(_))
+        ));
+        let mut file = random_file(4, 12, 1);
+        file.scales.pop();
+        assert!(matches!(
+            file.validate(),
+            Err(NnError::InconsistentModel(_))
+        ));
+        let mut file = random_file(4, 12, 1);
+        file.standardisation.std[3] = f32::NAN;
+        assert!(matches!(
+            file.validate(),
+            Err(NnError::InconsistentModel(_))
+        ));
+        let mut file = random_file(4, 12, 1);
+        file.model.n_scales = 8;
+        assert!(file.validate().is_err());
+    }
+
+    #[test]
+    fn truncated_body_is_a_decode_error() {
+        let bytes = random_file(2, 6, 1).to_bytes().unwrap();
+        assert!(matches!(
+            ModelFile::from_bytes(&bytes[..bytes.len() - 5]),
+            Err(NnError::Decode(_))
+        ));
+    }
+}
