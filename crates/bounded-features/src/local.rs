@@ -36,8 +36,8 @@ struct Moments {
 impl Moments {
     fn add(&mut self, q: [f64; 3]) {
         self.n += 1;
-        for a in 0..3 {
-            self.sum[a] += q[a];
+        for (s, c) in self.sum.iter_mut().zip(q) {
+            *s += c;
         }
         let o = &mut self.outer;
         o.xx += q[0] * q[0];
