@@ -1,6 +1,9 @@
 //! Criterion benchmark: streaming feature extraction, 4 default scales, on a
 //! synthetic cube-surface cloud (1M points; `BOUNDED_BENCH_POINTS` overrides).
 
+// criterion_group! generates an undocumented pub function.
+#![allow(missing_docs)]
+
 use bounded_features::{DEFAULT_CHUNK_POINTS, FeatureConfig, extract_chunks};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
