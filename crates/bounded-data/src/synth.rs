@@ -30,6 +30,7 @@
 mod grid;
 mod mesh;
 mod perturb;
+mod polyhedron;
 mod profile;
 mod sample;
 mod shapes;
@@ -76,7 +77,7 @@ impl SetKind {
         use ShapeKind as S;
         let cad = match shape {
             S::FractalCube => 3.0,
-            S::Box | S::Stairs | S::Prism | S::Lathe | S::RoundedPrism => 2.0,
+            S::Box | S::Stairs | S::Prism | S::Lathe | S::RoundedPrism | S::CutBlock => 2.0,
             S::Wedge | S::Notch | S::Frustum => 1.5,
             S::Cylinder => 1.0,
             S::Cone | S::Sphere | S::Torus => 0.7,

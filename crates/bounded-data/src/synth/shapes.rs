@@ -5,6 +5,7 @@
 //! per edge, so no label hinges on rounding.
 
 use super::mesh::Mesh;
+use super::polyhedron::Polyhedron;
 use super::profile::{P2, arc, extrude, revolve, round_corners, star_polygon};
 use super::vec3::{V3, segment_distance};
 use rand::Rng;
@@ -59,11 +60,13 @@ pub enum ShapeKind {
     OpenBox,
     /// A plate much thinner than the point spacing: boundary at its rim, as in the paper.
     ThinPlate,
+    /// A box with 1..4 slices cut off by random planes (corners and creases of any angle).
+    CutBlock,
 }
 
 impl ShapeKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [ShapeKind; 20] = [
+    pub const ALL: [ShapeKind; 21] = [
         ShapeKind::Box,
         ShapeKind::FractalCube,
         ShapeKind::Stairs,
@@ -84,6 +87,7 @@ impl ShapeKind {
         ShapeKind::Bowl,
         ShapeKind::OpenBox,
         ShapeKind::ThinPlate,
+        ShapeKind::CutBlock,
     ];
 
     /// Snake-case name, used in generated cloud names.
@@ -109,6 +113,7 @@ impl ShapeKind {
             ShapeKind::Bowl => "bowl",
             ShapeKind::OpenBox => "open_box",
             ShapeKind::ThinPlate => "thin_plate",
+            ShapeKind::CutBlock => "cut_block",
         }
     }
 
@@ -252,6 +257,14 @@ impl ShapeKind {
                 let (a, b) = (rng.random_range(0.3..1.0), rng.random_range(0.3..1.0));
                 let rect = [[0.0, 0.0], [a, 0.0], [a, b], [0.0, b]];
                 extrude(&rect, rng.random_range(0.2..0.8), true, [true, false])
+            }
+            ShapeKind::CutBlock => {
+                let size = [(); 3].map(|()| rng.random_range(0.4..1.0));
+                let mut block = Polyhedron::cuboid(size);
+                for _ in 0..rng.random_range(1..=4) {
+                    block.cut_randomly(rng);
+                }
+                block.to_mesh()
             }
             ShapeKind::ThinPlate => {
                 let mut m = polygon_sheet(rng);
