@@ -36,4 +36,38 @@ pub enum DataError {
         /// The underlying error.
         source: bounded_geom::GeomError,
     },
+    /// The labels of a labelled cloud cannot be derived (unknown colour, bad class value).
+    #[error("{path}: labels: {what}")]
+    Labels {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the point and value.
+        what: String,
+    },
+    /// A write request is inconsistent (e.g. fewer classes than points).
+    #[error("{path}: cannot write: {what}")]
+    InvalidOutput {
+        /// The file that was to be written.
+        path: PathBuf,
+        /// What is inconsistent.
+        what: String,
+    },
+}
+
+impl DataError {
+    /// A [`DataError::Malformed`] for `path`.
+    pub(crate) fn malformed(path: &std::path::Path, what: impl Into<String>) -> Self {
+        Self::Malformed {
+            path: path.to_path_buf(),
+            what: what.into(),
+        }
+    }
+
+    /// A [`DataError::Io`] for `path`.
+    pub(crate) fn io(path: &std::path::Path, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
 }

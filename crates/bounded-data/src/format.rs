@@ -1,1 +1,188 @@
 //! Format dispatch by file extension and atomic (temp file + rename) writing.
+//!
+//! Every write goes to a temporary file in the target directory that is renamed over the
+//! target only once complete, so an interrupted or failed write never leaves a partial file.
+//!
+//! Annotated outputs add these properties to every input property (input properties of the
+//! same names are replaced, not duplicated):
+//!
+//! | property | type | meaning |
+//! |---|---|---|
+//! | `class` | uchar | 0 non-edge, 1 sharp edge, 2 boundary |
+//! | `p_nonedge`, `p_sharp`, `p_boundary` | float | class probabilities |
+//! | `red`, `green`, `blue` | uchar | sharp (255,0,0), boundary (0,255,0), non-edge (160,160,160) |
+//!
+//! LAS stores `class` in the Classification field instead (see [`crate::las`]).
+
+use crate::table::{Column, PointTable, PositionType, Property, TableView};
+use crate::{DataError, LabelledCloud};
+use bounded_geom::Class;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::Path;
+
+/// A supported point-cloud file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Stanford PLY (`.ply`), written as binary little endian.
+    Ply,
+}
+
+impl Format {
+    /// The format named by `path`'s extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<Format, DataError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("ply") => Ok(Format::Ply),
+            _ => Err(DataError::UnknownFormat {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
+}
+
+/// Reads the cloud at `path`, in the format named by its extension, with every property.
+pub fn read(path: &Path) -> Result<PointTable, DataError> {
+    let format = Format::from_path(path)?;
+    let file = File::open(path).map_err(|e| DataError::io(path, e))?;
+    let input = BufReader::with_capacity(1 << 20, file);
+    match format {
+        Format::Ply => crate::ply::read_from(input, path),
+    }
+}
+
+/// Writes `table` unchanged to `path`, in the format named by its extension.
+pub fn write(path: &Path, table: &PointTable) -> Result<(), DataError> {
+    write_view(path, &table.view())
+}
+
+/// Writes `view` to `path`, in the format named by its extension.
+pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
+    let format = Format::from_path(path)?;
+    write_atomic(path, |file| match format {
+        Format::Ply => {
+            crate::ply::write_to(file, view, crate::ply::Encoding::BinaryLittleEndian, path)
+        }
+    })
+}
+
+/// Writes `table` with the detection results: `class`, `p_nonedge`, `p_sharp`, `p_boundary`
+/// and a class colour per point (see the module documentation).
+///
+/// `classes` and `probabilities` must have one entry per point.
+pub fn write_annotated(
+    path: &Path,
+    table: &PointTable,
+    classes: &[Class],
+    probabilities: &[[f32; 3]],
+) -> Result<(), DataError> {
+    if classes.len() != table.len() || probabilities.len() != table.len() {
+        return Err(DataError::InvalidOutput {
+            path: path.to_path_buf(),
+            what: format!(
+                "{} classes and {} probabilities for {} points",
+                classes.len(),
+                probabilities.len(),
+                table.len()
+            ),
+        });
+    }
+    let added = annotation(classes, probabilities);
+    let mut view = table.view();
+    view.properties
+        .retain(|p| !added.iter().any(|a| a.name == p.name));
+    view.properties.extend(&added);
+    write_view(path, &view)
+}
+
+/// Writes a ground-truth labelled cloud: positions and a `class` (uchar) property.
+pub fn write_labelled(path: &Path, labelled: &LabelledCloud) -> Result<(), DataError> {
+    if labelled.labels.len() != labelled.cloud.len() {
+        return Err(DataError::InvalidOutput {
+            path: path.to_path_buf(),
+            what: format!(
+                "{} labels for {} points",
+                labelled.labels.len(),
+                labelled.cloud.len()
+            ),
+        });
+    }
+    let class = class_property(&labelled.labels);
+    let view = TableView {
+        cloud: &labelled.cloud,
+        position_type: PositionType::for_cloud(&labelled.cloud),
+        properties: vec![&class],
+    };
+    write_view(path, &view)
+}
+
+/// The colour of each class in annotated outputs.
+pub fn class_colour(class: Class) -> [u8; 3] {
+    match class {
+        Class::NonEdge => [160, 160, 160],
+        Class::Sharp => [255, 0, 0],
+        Class::Boundary => [0, 255, 0],
+    }
+}
+
+fn class_property(classes: &[Class]) -> Property {
+    Property::new(
+        "class",
+        Column::U8(classes.iter().map(|&c| c as u8).collect()),
+    )
+}
+
+fn annotation(classes: &[Class], probabilities: &[[f32; 3]]) -> Vec<Property> {
+    let probability = |name: &str, k: usize| {
+        Property::new(
+            name,
+            Column::F32(probabilities.iter().map(|p| p[k]).collect()),
+        )
+    };
+    let colour = |name: &str, k: usize| {
+        Property::new(
+            name,
+            Column::U8(classes.iter().map(|&c| class_colour(c)[k]).collect()),
+        )
+    };
+    vec![
+        class_property(classes),
+        probability("p_nonedge", 0),
+        probability("p_sharp", 1),
+        probability("p_boundary", 2),
+        colour("red", 0),
+        colour("green", 1),
+        colour("blue", 2),
+    ]
+}
+
+/// Runs `write` on a temporary file next to `path`, then renames it to `path`; on any
+/// error the temporary file is removed and `path` is left untouched.
+pub(crate) fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut File) -> Result<(), DataError>,
+) -> Result<(), DataError> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".bounded-")
+        .suffix(".part")
+        .tempfile_in(dir)
+        .map_err(|e| DataError::io(path, e))?;
+    write(tmp.as_file_mut())?;
+    // Temp files are private (0600); the result should be an ordinary file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| DataError::io(path, e))?;
+    }
+    tmp.persist(path)
+        .map_err(|e| DataError::io(path, e.error))?;
+    Ok(())
+}

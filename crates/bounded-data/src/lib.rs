@@ -8,6 +8,7 @@ mod labelled;
 pub mod abc;
 pub mod dataset;
 pub mod format;
+pub mod labels;
 pub mod las;
 pub mod pcd;
 pub mod ply;
