@@ -26,6 +26,8 @@ use std::path::Path;
 pub enum Format {
     /// Stanford PLY (`.ply`), written as binary little endian.
     Ply,
+    /// PCL's PCD (`.pcd`), written as `DATA binary`.
+    Pcd,
 }
 
 impl Format {
@@ -37,6 +39,7 @@ impl Format {
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("ply") => Ok(Format::Ply),
+            Some("pcd") => Ok(Format::Pcd),
             _ => Err(DataError::UnknownFormat {
                 path: path.to_path_buf(),
             }),
@@ -51,6 +54,7 @@ pub fn read(path: &Path) -> Result<PointTable, DataError> {
     let input = BufReader::with_capacity(1 << 20, file);
     match format {
         Format::Ply => crate::ply::read_from(input, path),
+        Format::Pcd => crate::pcd::read_from(input, path),
     }
 }
 
@@ -66,6 +70,7 @@ pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
         Format::Ply => {
             crate::ply::write_to(file, view, crate::ply::Encoding::BinaryLittleEndian, path)
         }
+        Format::Pcd => crate::pcd::write_to(file, view, path),
     })
 }
 

@@ -4,6 +4,7 @@
 
 mod error;
 mod labelled;
+mod records;
 
 pub mod abc;
 pub mod dataset;

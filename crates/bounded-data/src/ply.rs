@@ -10,9 +10,7 @@
 //! read.
 
 use crate::DataError;
-use crate::table::{
-    Column, Endian, PointTable, PositionType, Property, Scalar, ScalarType, TableView,
-};
+use crate::table::{Column, Endian, PointTable, Property, ScalarType, TableView};
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
 
@@ -44,13 +42,6 @@ impl Encoding {
         }
     }
 }
-
-/// Records decoded or encoded per block: 64k records keep the buffer in cache-friendly
-/// megabytes while amortising the per-block column dispatch.
-const BLOCK: usize = 1 << 16;
-/// Header lines longer than this are rejected (guards against reading a binary blob as
-/// one "line").
-const MAX_HEADER_LINE: u64 = 64 * 1024;
 
 #[derive(Debug, Clone, Copy)]
 enum Kind {
@@ -102,33 +93,6 @@ fn type_name(ty: ScalarType) -> &'static str {
     }
 }
 
-/// Reads one line of at most [`MAX_HEADER_LINE`] bytes, without its `\n` / `\r\n`; `None`
-/// at end of input.
-pub(crate) fn read_line(
-    input: &mut impl BufRead,
-    buf: &mut Vec<u8>,
-    path: &Path,
-) -> Result<Option<usize>, DataError> {
-    buf.clear();
-    let n = input
-        .by_ref()
-        .take(MAX_HEADER_LINE)
-        .read_until(b'\n', buf)
-        .map_err(|e| DataError::io(path, e))?;
-    if n == 0 {
-        return Ok(None);
-    }
-    if buf.last() == Some(&b'\n') {
-        buf.pop();
-    } else if n as u64 == MAX_HEADER_LINE {
-        return Err(DataError::malformed(path, "header line too long"));
-    }
-    if buf.last() == Some(&b'\r') {
-        buf.pop();
-    }
-    Ok(Some(n))
-}
-
 fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataError> {
     let mut buf = Vec::new();
     let mut header = Header {
@@ -139,7 +103,7 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
     };
     let mut format_seen = false;
     loop {
-        let n = read_line(input, &mut buf, path)?
+        let n = crate::records::read_line(input, &mut buf, path)?
             .ok_or_else(|| DataError::malformed(path, "the PLY header ends before 'end_header'"))?;
         header.lines += 1;
         header.bytes += n as u64;
@@ -255,7 +219,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
     // Never trust the header count for allocation: a corrupt count must not exhaust memory.
     let mut columns: Vec<Column> = types
         .iter()
-        .map(|&ty| Column::with_capacity(ty, count.min(BLOCK)))
+        .map(|&ty| Column::with_capacity(ty, count.min(crate::records::BLOCK)))
         .collect();
     match header.encoding.endian() {
         None => {
@@ -271,7 +235,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
             for element in &header.elements[..vertex_at] {
                 skip_binary_items(&mut input, element, endian, &mut offset, path)?;
             }
-            read_binary_vertices(
+            crate::records::read_records(
                 &mut input,
                 count,
                 &types,
@@ -338,7 +302,7 @@ fn read_ascii_vertices(
     let mut done = 0;
     while done < count {
         *line += 1;
-        let Some(_) = read_line(input, &mut buf, path)? else {
+        let Some(_) = crate::records::read_line(input, &mut buf, path)? else {
             return Err(DataError::malformed(
                 path,
                 format!("the file ends at line {line} after {done} of {count} vertices"),
@@ -349,47 +313,10 @@ fn read_ascii_vertices(
         if text.trim().is_empty() {
             continue;
         }
-        parse_row(text, columns, *line, path)?;
+        crate::records::parse_row(text.split_ascii_whitespace(), columns, *line, path)?;
         done += 1;
     }
     Ok(())
-}
-
-/// Parses one whitespace-separated row into `columns`.
-pub(crate) fn parse_row(
-    text: &str,
-    columns: &mut [Column],
-    line: usize,
-    path: &Path,
-) -> Result<(), DataError> {
-    let expected = columns.len();
-    let mut tokens = text.split_ascii_whitespace();
-    for (k, column) in columns.iter_mut().enumerate() {
-        let token = tokens.next().ok_or_else(|| {
-            DataError::malformed(
-                path,
-                format!("line {line}: expected {expected} values, found {k}"),
-            )
-        })?;
-        column.push_token(token).map_err(|e| {
-            DataError::malformed(path, format!("line {line}, value {}: {e}", k + 1))
-        })?;
-    }
-    if tokens.next().is_some() {
-        return Err(DataError::malformed(
-            path,
-            format!("line {line}: more than {expected} values"),
-        ));
-    }
-    Ok(())
-}
-
-fn truncated(path: &Path, what: String, e: std::io::Error) -> DataError {
-    if e.kind() == std::io::ErrorKind::UnexpectedEof {
-        DataError::malformed(path, what)
-    } else {
-        DataError::io(path, e)
-    }
 }
 
 fn skip_binary_items(
@@ -432,7 +359,7 @@ fn skip_binary_items(
                     let bytes = &mut scratch[..count.size()];
                     input
                         .read_exact(bytes)
-                        .map_err(|e| truncated(path, ends(*offset), e))?;
+                        .map_err(|e| crate::records::truncated(path, ends(*offset), e))?;
                     *offset += count.size() as u64;
                     let mut c = Column::with_capacity(count, 1);
                     c.decode_packed(bytes, endian);
@@ -453,48 +380,6 @@ fn skip_binary_items(
                 return Err(DataError::malformed(path, ends(*offset)));
             }
         }
-    }
-    Ok(())
-}
-
-fn read_binary_vertices(
-    input: &mut impl Read,
-    count: usize,
-    types: &[ScalarType],
-    columns: &mut [Column],
-    endian: Endian,
-    offset: u64,
-    path: &Path,
-) -> Result<(), DataError> {
-    let stride: usize = types.iter().map(|t| t.size()).sum();
-    let offsets: Vec<usize> = types
-        .iter()
-        .scan(0, |at, t| {
-            let o = *at;
-            *at += t.size();
-            Some(o)
-        })
-        .collect();
-    let mut buf = vec![0u8; stride * count.min(BLOCK)];
-    let mut done = 0;
-    while done < count {
-        let n = (count - done).min(BLOCK);
-        let block = &mut buf[..n * stride];
-        input.read_exact(block).map_err(|e| {
-            truncated(
-                path,
-                format!(
-                    "the vertex data ends within vertex {} of {count} (block at byte offset {})",
-                    done,
-                    offset + (done * stride) as u64
-                ),
-                e,
-            )
-        })?;
-        for (column, &at) in columns.iter_mut().zip(&offsets) {
-            column.decode_strided(block, stride, at, endian);
-        }
-        done += n;
     }
     Ok(())
 }
@@ -538,91 +423,15 @@ fn write_body(
     }
     writeln!(out, "end_header")?;
     match encoding.endian() {
-        None => write_ascii_rows(out, view, ' '),
-        Some(endian) => write_binary_records(out, view, endian),
-    }
-}
-
-/// Writes one text row per point: positions then properties, separated by `separator`.
-pub(crate) fn write_ascii_rows(
-    out: &mut impl Write,
-    view: &TableView<'_>,
-    separator: char,
-) -> std::io::Result<()> {
-    let f32_positions = view.position_type == PositionType::F32;
-    for i in 0..view.len() {
-        let p = view.position(i);
-        if f32_positions {
-            write!(
-                out,
-                "{}{separator}{}{separator}{}",
-                p[0] as f32, p[1] as f32, p[2] as f32
-            )?;
-        } else {
-            write!(out, "{}{separator}{}{separator}{}", p[0], p[1], p[2])?;
-        }
-        for property in &view.properties {
-            write!(out, "{separator}")?;
-            property.values.write_text(i, out)?;
-        }
-        writeln!(out)?;
-    }
-    Ok(())
-}
-
-/// Writes fixed-size records (x, y, z, then each property) in blocks.
-pub(crate) fn write_binary_records(
-    out: &mut impl Write,
-    view: &TableView<'_>,
-    endian: Endian,
-) -> std::io::Result<()> {
-    let position = view.position_type.float_type();
-    let p_size = position.size();
-    let stride = 3 * p_size
-        + view
-            .properties
-            .iter()
-            .map(|p| p.values.scalar_type().size())
-            .sum::<usize>();
-    let mut buf = vec![0u8; stride * view.len().min(BLOCK)];
-    let mut first = 0;
-    while first < view.len() {
-        let n = (view.len() - first).min(BLOCK);
-        let block = &mut buf[..n * stride];
-        match position {
-            ScalarType::F32 => encode_positions::<f32>(view, first, block, stride, endian),
-            _ => encode_positions::<f64>(view, first, block, stride, endian),
-        }
-        let mut at = 3 * p_size;
-        for p in &view.properties {
-            p.values.encode_strided(first, block, stride, at, endian);
-            at += p.values.scalar_type().size();
-        }
-        out.write_all(block)?;
-        first += n;
-    }
-    Ok(())
-}
-
-/// Encodes the positions of points `first..` as `T` at the start of each record.
-fn encode_positions<T: Scalar>(
-    view: &TableView<'_>,
-    first: usize,
-    block: &mut [u8],
-    stride: usize,
-    endian: Endian,
-) {
-    for (k, record) in block.chunks_exact_mut(stride).enumerate() {
-        let p = view.position(first + k);
-        for (a, c) in p.into_iter().enumerate() {
-            T::from_f64(c).encode(&mut record[a * T::SIZE..], endian);
-        }
+        None => crate::records::write_text_rows(out, view, ' '),
+        Some(endian) => crate::records::write_records(out, view, endian),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::table::PositionType;
     use bounded_geom::PointCloud;
     use std::io::Cursor;
 
@@ -741,7 +550,7 @@ mod tests {
             (HEAD.replace("vertex 2", "vertex 0").into_bytes(), "empty"),
             (
                 format!("{}\0\0\0\0", HEAD.replace("ascii", "binary_little_endian")).into_bytes(),
-                "ends within vertex 0 of 2 (block at byte offset 115)",
+                "ends within point 0 of 2 (block at byte offset 115)",
             ),
         ];
         for (bytes, expected) in cases {

@@ -443,6 +443,12 @@ impl TableView<'_> {
                     self.len()
                 ));
             }
+            if p.name.is_empty() || p.name.contains(|c: char| c.is_whitespace() || c == ',') {
+                return Err(format!(
+                    "property name '{}' is empty or has a space or comma",
+                    p.name
+                ));
+            }
             if matches!(p.name.as_str(), "x" | "y" | "z") || !seen.insert(p.name.as_str()) {
                 return Err(format!("property name '{}' is used twice", p.name));
             }

@@ -1,0 +1,200 @@
+//! Shared codecs: fixed-size binary records decoded and encoded in blocks, text rows
+//! parsed and written, header lines read with a length limit.
+
+use crate::DataError;
+use crate::table::{Column, Endian, PositionType, Scalar, ScalarType, TableView};
+use std::io::{BufRead, Read, Write};
+use std::path::Path;
+
+/// Records decoded or encoded per block: 64k records keep the buffer in cache-friendly
+/// megabytes while amortising the per-block column dispatch.
+pub(crate) const BLOCK: usize = 1 << 16;
+/// Header lines longer than this are rejected (guards against reading a binary blob as
+/// one "line").
+pub(crate) const MAX_HEADER_LINE: u64 = 64 * 1024;
+
+/// Reads one line of at most [`MAX_HEADER_LINE`] bytes, without its `\n` / `\r\n`; `None`
+/// at end of input.
+pub(crate) fn read_line(
+    input: &mut impl BufRead,
+    buf: &mut Vec<u8>,
+    path: &Path,
+) -> Result<Option<usize>, DataError> {
+    buf.clear();
+    let n = input
+        .by_ref()
+        .take(MAX_HEADER_LINE)
+        .read_until(b'\n', buf)
+        .map_err(|e| DataError::io(path, e))?;
+    if n == 0 {
+        return Ok(None);
+    }
+    if buf.last() == Some(&b'\n') {
+        buf.pop();
+    } else if n as u64 == MAX_HEADER_LINE {
+        return Err(DataError::malformed(path, "header line too long"));
+    }
+    if buf.last() == Some(&b'\r') {
+        buf.pop();
+    }
+    Ok(Some(n))
+}
+
+/// Parses the `tokens` of one text row into `columns`, one token each.
+pub(crate) fn parse_row<'t>(
+    mut tokens: impl Iterator<Item = &'t str>,
+    columns: &mut [Column],
+    line: usize,
+    path: &Path,
+) -> Result<(), DataError> {
+    let expected = columns.len();
+    for (k, column) in columns.iter_mut().enumerate() {
+        let token = tokens.next().ok_or_else(|| {
+            DataError::malformed(
+                path,
+                format!("line {line}: expected {expected} values, found {k}"),
+            )
+        })?;
+        column.push_token(token).map_err(|e| {
+            DataError::malformed(path, format!("line {line}, value {}: {e}", k + 1))
+        })?;
+    }
+    if tokens.next().is_some() {
+        return Err(DataError::malformed(
+            path,
+            format!("line {line}: more than {expected} values"),
+        ));
+    }
+    Ok(())
+}
+
+/// A truncation (unexpected end of input) as a [`DataError::Malformed`] saying `what`,
+/// any other I/O error as [`DataError::Io`].
+pub(crate) fn truncated(path: &Path, what: String, e: std::io::Error) -> DataError {
+    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+        DataError::malformed(path, what)
+    } else {
+        DataError::io(path, e)
+    }
+}
+
+/// Reads `count` records of the fixed-size `types` into `columns`, in blocks; `offset` is
+/// the byte offset of the first record, for error messages.
+pub(crate) fn read_records(
+    input: &mut impl Read,
+    count: usize,
+    types: &[ScalarType],
+    columns: &mut [Column],
+    endian: Endian,
+    offset: u64,
+    path: &Path,
+) -> Result<(), DataError> {
+    let stride: usize = types.iter().map(|t| t.size()).sum();
+    let offsets: Vec<usize> = types
+        .iter()
+        .scan(0, |at, t| {
+            let o = *at;
+            *at += t.size();
+            Some(o)
+        })
+        .collect();
+    let mut buf = vec![0u8; stride * count.min(BLOCK)];
+    let mut done = 0;
+    while done < count {
+        let n = (count - done).min(BLOCK);
+        let block = &mut buf[..n * stride];
+        input.read_exact(block).map_err(|e| {
+            truncated(
+                path,
+                format!(
+                    "the point data ends within point {} of {count} (block at byte offset {})",
+                    done,
+                    offset + (done * stride) as u64
+                ),
+                e,
+            )
+        })?;
+        for (column, &at) in columns.iter_mut().zip(&offsets) {
+            column.decode_strided(block, stride, at, endian);
+        }
+        done += n;
+    }
+    Ok(())
+}
+
+/// Writes one text row per point: positions then properties, separated by `separator`.
+pub(crate) fn write_text_rows(
+    out: &mut impl Write,
+    view: &TableView<'_>,
+    separator: char,
+) -> std::io::Result<()> {
+    let f32_positions = view.position_type == PositionType::F32;
+    for i in 0..view.len() {
+        let p = view.position(i);
+        if f32_positions {
+            write!(
+                out,
+                "{}{separator}{}{separator}{}",
+                p[0] as f32, p[1] as f32, p[2] as f32
+            )?;
+        } else {
+            write!(out, "{}{separator}{}{separator}{}", p[0], p[1], p[2])?;
+        }
+        for property in &view.properties {
+            write!(out, "{separator}")?;
+            property.values.write_text(i, out)?;
+        }
+        writeln!(out)?;
+    }
+    Ok(())
+}
+
+/// Writes fixed-size records (x, y, z, then each property) in blocks.
+pub(crate) fn write_records(
+    out: &mut impl Write,
+    view: &TableView<'_>,
+    endian: Endian,
+) -> std::io::Result<()> {
+    let position = view.position_type.float_type();
+    let p_size = position.size();
+    let stride = 3 * p_size
+        + view
+            .properties
+            .iter()
+            .map(|p| p.values.scalar_type().size())
+            .sum::<usize>();
+    let mut buf = vec![0u8; stride * view.len().min(BLOCK)];
+    let mut first = 0;
+    while first < view.len() {
+        let n = (view.len() - first).min(BLOCK);
+        let block = &mut buf[..n * stride];
+        match position {
+            ScalarType::F32 => encode_positions::<f32>(view, first, block, stride, endian),
+            _ => encode_positions::<f64>(view, first, block, stride, endian),
+        }
+        let mut at = 3 * p_size;
+        for p in &view.properties {
+            p.values.encode_strided(first, block, stride, at, endian);
+            at += p.values.scalar_type().size();
+        }
+        out.write_all(block)?;
+        first += n;
+    }
+    Ok(())
+}
+
+/// Encodes the positions of points `first..` as `T` at the start of each record.
+fn encode_positions<T: Scalar>(
+    view: &TableView<'_>,
+    first: usize,
+    block: &mut [u8],
+    stride: usize,
+    endian: Endian,
+) {
+    for (k, record) in block.chunks_exact_mut(stride).enumerate() {
+        let p = view.position(first + k);
+        for (a, c) in p.into_iter().enumerate() {
+            T::from_f64(c).encode(&mut record[a * T::SIZE..], endian);
+        }
+    }
+}
