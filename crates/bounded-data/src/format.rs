@@ -28,6 +28,8 @@ pub enum Format {
     Ply,
     /// PCL's PCD (`.pcd`), written as `DATA binary`.
     Pcd,
+    /// Text, one point per line (`.xyz`, `.txt` space-separated, `.csv` comma-separated).
+    Xyz(crate::xyz::Separator),
 }
 
 impl Format {
@@ -40,6 +42,8 @@ impl Format {
         match ext.as_deref() {
             Some("ply") => Ok(Format::Ply),
             Some("pcd") => Ok(Format::Pcd),
+            Some("xyz" | "txt") => Ok(Format::Xyz(crate::xyz::Separator::Space)),
+            Some("csv") => Ok(Format::Xyz(crate::xyz::Separator::Comma)),
             _ => Err(DataError::UnknownFormat {
                 path: path.to_path_buf(),
             }),
@@ -55,6 +59,7 @@ pub fn read(path: &Path) -> Result<PointTable, DataError> {
     match format {
         Format::Ply => crate::ply::read_from(input, path),
         Format::Pcd => crate::pcd::read_from(input, path),
+        Format::Xyz(_) => crate::xyz::read_from(input, path),
     }
 }
 
@@ -71,6 +76,7 @@ pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
             crate::ply::write_to(file, view, crate::ply::Encoding::BinaryLittleEndian, path)
         }
         Format::Pcd => crate::pcd::write_to(file, view, path),
+        Format::Xyz(separator) => crate::xyz::write_to(file, view, separator, path),
     })
 }
 
