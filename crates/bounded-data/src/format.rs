@@ -18,7 +18,7 @@ use crate::table::{Column, PointTable, PositionType, Property, TableView};
 use crate::{DataError, LabelledCloud};
 use bounded_geom::Class;
 use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufReader, BufWriter};
 use std::path::Path;
 
 /// A supported point-cloud file format.
@@ -28,6 +28,11 @@ pub enum Format {
     Ply,
     /// PCL's PCD (`.pcd`), written as `DATA binary`.
     Pcd,
+    /// ASPRS LAS (`.las`), or LAZ (`.laz`) when `compressed`.
+    Las {
+        /// LAZ (LASzip-compressed) rather than plain LAS.
+        compressed: bool,
+    },
     /// Text, one point per line (`.xyz`, `.txt` space-separated, `.csv` comma-separated).
     Xyz(crate::xyz::Separator),
 }
@@ -43,6 +48,8 @@ impl Format {
             Some("ply") => Ok(Format::Ply),
             Some("pcd") => Ok(Format::Pcd),
             Some("xyz" | "txt") => Ok(Format::Xyz(crate::xyz::Separator::Space)),
+            Some("las") => Ok(Format::Las { compressed: false }),
+            Some("laz") => Ok(Format::Las { compressed: true }),
             Some("csv") => Ok(Format::Xyz(crate::xyz::Separator::Comma)),
             _ => Err(DataError::UnknownFormat {
                 path: path.to_path_buf(),
@@ -60,6 +67,7 @@ pub fn read(path: &Path) -> Result<PointTable, DataError> {
         Format::Ply => crate::ply::read_from(input, path),
         Format::Pcd => crate::pcd::read_from(input, path),
         Format::Xyz(_) => crate::xyz::read_from(input, path),
+        Format::Las { .. } => crate::las::read_from(input, path),
     }
 }
 
@@ -77,6 +85,11 @@ pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
         }
         Format::Pcd => crate::pcd::write_to(file, view, path),
         Format::Xyz(separator) => crate::xyz::write_to(file, view, separator, path),
+        Format::Las { compressed } => {
+            let file = file.try_clone().map_err(|e| DataError::io(path, e))?;
+            let out = BufWriter::with_capacity(1 << 20, file);
+            crate::las::write_to(out, view, compressed, path).map(drop)
+        }
     })
 }
 
@@ -196,4 +209,147 @@ pub(crate) fn write_atomic(
     tmp.persist(path)
         .map_err(|e| DataError::io(path, e.error))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::labels::{Convention, load};
+    use bounded_geom::PointCloud;
+
+    fn sample() -> PointTable {
+        let cloud =
+            PointCloud::from_f64(&[[0.5, -1.25, 2.0], [1.5, 3.0, -4.0], [0.0, 0.0, 0.0]]).unwrap();
+        let mut t = PointTable::new(cloud);
+        t.set_property(Property::new("intensity", Column::U16(vec![1, 65535, 7])));
+        t.set_property(Property::new("red", Column::U8(vec![9, 9, 9])));
+        t.set_property(Property::new("class", Column::U8(vec![2, 2, 2])));
+        t
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn format_from_extension() {
+        assert_eq!(
+            Format::from_path(Path::new("a/b.PLY")).unwrap(),
+            Format::Ply
+        );
+        let laz = Format::from_path(Path::new("b.Laz")).unwrap();
+        assert_eq!(laz, Format::Las { compressed: true });
+        let e = Format::from_path(Path::new("cloud.obj"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("cloud.obj: unknown point-cloud format"),
+            "{e}"
+        );
+        assert!(Format::from_path(Path::new("noext")).is_err());
+    }
+
+    #[test]
+    fn annotated_output_replaces_same_named_properties_in_every_format() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = sample();
+        let classes = [Class::Sharp, Class::NonEdge, Class::Boundary];
+        let probabilities = [[0.1, 0.8, 0.1], [0.9, 0.05, 0.05], [0.2, 0.2, 0.6]];
+        for ext in ["ply", "pcd", "xyz", "txt", "csv", "las", "laz"] {
+            let path = dir.path().join(format!("out.{ext}"));
+            write_annotated(&path, &t, &classes, &probabilities).unwrap();
+            let back = read(&path).unwrap();
+            assert_eq!(back.len(), 3, "{ext}");
+            let names: Vec<&str> = back.properties.iter().map(|p| p.name.as_str()).collect();
+            let red = back.property("red").unwrap();
+            // LAS stores 16-bit colours.
+            let full = if ext.starts_with("la") {
+                65535.0
+            } else {
+                255.0
+            };
+            assert_eq!(
+                [0, 1, 2].map(|i| red.get_f64(i)),
+                [full, full * 160.0 / 255.0, 0.0],
+                "{ext}"
+            );
+            assert_eq!(names.iter().filter(|n| **n == "red").count(), 1, "{ext}");
+            assert_eq!(
+                back.property("intensity").unwrap().get_f64(1),
+                65535.0,
+                "{ext}"
+            );
+            let p_sharp = back.property("p_sharp").unwrap();
+            assert_eq!(p_sharp.get_f64(0) as f32, 0.8, "{ext}");
+            if ext.starts_with("la") {
+                let codes = back.property("classification").unwrap();
+                assert_eq!([0, 1, 2].map(|i| codes.get_f64(i)), [64.0, 1.0, 65.0]);
+                let original = back.property("input_classification");
+                assert_eq!(
+                    original, None,
+                    "class, not classification, was in the input"
+                );
+            } else {
+                let labels = crate::labels::from_table(back, Convention::ClassProperty, &path);
+                assert_eq!(labels.unwrap().labels, classes, "{ext}");
+            }
+        }
+        assert_eq!(entries(dir.path()).len(), 7, "no temporary files left");
+    }
+
+    #[test]
+    fn labelled_output_round_trips_through_the_class_loader() {
+        let dir = tempfile::tempdir().unwrap();
+        let cloud = PointCloud::from_f64(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).unwrap();
+        let labelled = LabelledCloud {
+            cloud,
+            labels: vec![Class::Boundary, Class::NonEdge, Class::Sharp],
+        };
+        for ext in ["ply", "pcd", "csv"] {
+            let path = dir.path().join(format!("l.{ext}"));
+            write_labelled(&path, &labelled).unwrap();
+            assert_eq!(
+                load(&path, Convention::ClassProperty).unwrap(),
+                labelled,
+                "{ext}"
+            );
+        }
+    }
+
+    #[test]
+    fn failed_writes_leave_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = sample();
+        let path = dir.path().join("out.ply");
+        // Too few classes: rejected before any file exists.
+        let e = write_annotated(&path, &t, &[Class::Sharp], &[[0.0; 3]]).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("1 classes and 1 probabilities for 3 points"),
+            "{e}"
+        );
+        // A property of the wrong length fails inside the writer, after the temp file exists.
+        let mut bad = t.clone();
+        bad.properties
+            .push(Property::new("short", Column::U8(vec![1])));
+        for ext in ["ply", "pcd", "xyz", "las"] {
+            let path = dir.path().join(format!("out.{ext}"));
+            let e = write(&path, &bad).unwrap_err().to_string();
+            assert!(e.contains("'short' has 1 values for 3 points"), "{e}");
+        }
+        assert_eq!(entries(dir.path()), Vec::<String>::new());
+        // An existing file is left untouched by a failed overwrite.
+        write(&path, &t).unwrap();
+        let before = std::fs::read(&path).unwrap();
+        assert!(write(&path, &bad).is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), before);
+        assert_eq!(entries(dir.path()), ["out.ply"]);
+        let missing = dir.path().join("no/such/dir/out.ply");
+        assert!(matches!(write(&missing, &t), Err(DataError::Io { .. })));
+    }
 }

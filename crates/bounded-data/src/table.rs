@@ -45,6 +45,21 @@ impl ScalarType {
     pub fn is_float(self) -> bool {
         matches!(self, ScalarType::F32 | ScalarType::F64)
     }
+
+    /// Encodes `value` converted to this type (`as` semantics: saturating, truncating) into
+    /// the first [`size`](Self::size) bytes of `out`.
+    pub(crate) fn encode_f64(self, value: f64, out: &mut [u8], endian: Endian) {
+        match self {
+            ScalarType::U8 => u8::from_f64(value).encode(out, endian),
+            ScalarType::I8 => i8::from_f64(value).encode(out, endian),
+            ScalarType::U16 => u16::from_f64(value).encode(out, endian),
+            ScalarType::I16 => i16::from_f64(value).encode(out, endian),
+            ScalarType::U32 => u32::from_f64(value).encode(out, endian),
+            ScalarType::I32 => i32::from_f64(value).encode(out, endian),
+            ScalarType::F32 => f32::from_f64(value).encode(out, endian),
+            ScalarType::F64 => value.encode(out, endian),
+        }
+    }
 }
 
 /// How the positions were (or are to be) stored in a file.
