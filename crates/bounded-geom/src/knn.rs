@@ -1,11 +1,10 @@
 //! All-points exact k-nearest-neighbour search, traversed in Morton-ordered chunks.
 
-use std::num::NonZero;
-
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use crate::{GeomError, PointCloud, morton::morton_order};
+use crate::grid::{Grid, Scratch, Sorted};
+use crate::morton::{Quantiser, sorted_codes};
+use crate::{GeomError, PointCloud};
 
 /// Neighbour lists of a run of query points, as handed out by
 /// [`KnnIndex::for_each_chunk`].
@@ -53,32 +52,36 @@ impl NeighbourChunk {
 
 /// An exact all-points kNN index over a [`PointCloud`].
 ///
-/// Built once; every query asks for the `k0` nearest neighbours of a cloud point, so
-/// each smaller `k` is a prefix of the same list. Points are visited in Morton order so
-/// consecutive queries hit the same part of the tree.
-pub struct KnnIndex<'a> {
-    points: &'a [[f32; 3]],
-    tree: ImmutableKdTree<f32, 3>,
+/// Holds a Morton-sorted copy of the points (16 bytes per point). Every query asks for
+/// the `k` nearest neighbours of a cloud point, so each smaller `k` is a prefix of the
+/// same list. Queries run cell by cell on a uniform grid sized for `k`, consecutive
+/// queries sharing one candidate set (see the `grid` module's notes in the source).
+pub struct KnnIndex {
+    quant: Quantiser,
+    points: Vec<[f32; 3]>,
     order: Vec<u32>,
 }
 
-impl<'a> KnnIndex<'a> {
-    /// Builds the index (a kiddo k-d tree and the Morton order of the points).
-    pub fn new(cloud: &'a PointCloud) -> Result<Self, GeomError> {
-        let points = cloud.points();
-        if u32::try_from(points.len()).is_err() {
+impl KnnIndex {
+    /// Builds the index: sorts the points by Morton code.
+    pub fn new(cloud: &PointCloud) -> Result<Self, GeomError> {
+        let cloud_points = cloud.points();
+        if u32::try_from(cloud_points.len()).is_err() {
             return Err(GeomError::TooManyPoints {
-                points: points.len(),
+                points: cloud_points.len(),
             });
         }
-        let tree =
-            ImmutableKdTree::new_from_slice(points).map_err(|_| GeomError::TooManyPoints {
-                points: points.len(),
-            })?;
+        let quant = Quantiser::new(cloud_points);
+        let sorted = sorted_codes(cloud_points, &quant);
+        let points = sorted
+            .iter()
+            .map(|&(_, i)| cloud_points[i as usize])
+            .collect();
+        let order = sorted.into_iter().map(|(_, i)| i).collect();
         Ok(Self {
+            quant,
             points,
-            tree,
-            order: morton_order(points),
+            order,
         })
     }
 
@@ -97,19 +100,42 @@ impl<'a> KnnIndex<'a> {
         &self.order
     }
 
+    fn sorted(&self) -> Sorted<'_> {
+        Sorted {
+            quant: &self.quant,
+            points: &self.points,
+            order: &self.order,
+        }
+    }
+
     /// The `k` nearest neighbours of point `query`, written to `out` (length `k`): the
     /// point itself first, then by increasing distance, ties by increasing index.
+    ///
+    /// A spot check: it builds a grid for `k` and costs `O(n)`; use
+    /// [`for_each_chunk`](Self::for_each_chunk) for many points. Fails like
+    /// `for_each_chunk` for a bad `k`, and with `TooFewPoints` for a `query` out of range.
     pub fn nearest(&self, query: u32, out: &mut [u32]) -> Result<(), GeomError> {
         self.check_k(out.len())?;
-        self.nearest_unchecked(query, out, &mut Vec::new());
+        let pos = self
+            .order
+            .iter()
+            .position(|&i| i == query)
+            .ok_or(GeomError::TooFewPoints {
+                points: self.len(),
+                k: query as usize + 1,
+            })?;
+        let sorted = self.sorted();
+        let grid = Grid::new(&sorted, out.len());
+        let cell = grid.cell_of(pos);
+        grid.search_cell(&sorted, cell, pos..pos + 1, out, &mut Scratch::default());
         Ok(())
     }
 
     /// Calls `f` with the neighbour lists (`k` per point) of consecutive runs of at most
-    /// `chunk_points` points in Morton order, covering every point once.
+    /// `chunk_points` points in Morton order (0 counts as 1), covering every point once.
     ///
     /// Each chunk is searched in parallel; `f` runs on the calling thread, in order.
-    /// Memory is `O(chunk_points * k)` whatever the cloud size.
+    /// Memory is `O(chunk_points * k)` beyond the index, whatever the cloud size.
     pub fn for_each_chunk(
         &self,
         k: usize,
@@ -117,22 +143,38 @@ impl<'a> KnnIndex<'a> {
         mut f: impl FnMut(&NeighbourChunk),
     ) -> Result<(), GeomError> {
         self.check_k(k)?;
+        let sorted = self.sorted();
+        let grid = Grid::new(&sorted, k);
         let mut chunk = NeighbourChunk {
             k,
             ..NeighbourChunk::default()
         };
-        for queries in self.order.chunks(chunk_points.max(1)) {
+        let mut start = 0;
+        while start < self.len() {
+            let end = (start + chunk_points.max(1)).min(self.len());
             chunk.queries.clear();
-            chunk.queries.extend_from_slice(queries);
-            chunk.neighbours.resize(queries.len() * k, 0);
-            chunk
-                .neighbours
-                .par_chunks_mut(k)
-                .zip(queries.par_iter())
-                .for_each_init(Vec::new, |scratch, (out, &q)| {
-                    self.nearest_unchecked(q, out, scratch)
-                });
+            chunk.queries.extend_from_slice(&self.order[start..end]);
+            chunk.neighbours.resize((end - start) * k, 0);
+            // Split the chunk into runs within one cell, each with its own rows.
+            let mut jobs = Vec::new();
+            let mut rest = chunk.neighbours.as_mut_slice();
+            let mut pos = start;
+            while pos < end {
+                let cell = grid.cell_of(pos);
+                let stop = grid.range(cell).end.min(end);
+                let (rows, tail) = rest.split_at_mut((stop - pos) * k);
+                jobs.push((cell, pos..stop, rows));
+                rest = tail;
+                pos = stop;
+            }
+            jobs.into_par_iter().for_each_init(
+                Scratch::default,
+                |scratch, (cell, queries, rows)| {
+                    grid.search_cell(&sorted, cell, queries, rows, scratch)
+                },
+            );
             f(&chunk);
+            start = end;
         }
         Ok(())
     }
@@ -146,54 +188,6 @@ impl<'a> KnnIndex<'a> {
         }
         Ok(())
     }
-
-    /// Search for `out.len()` (checked: 1..=n) neighbours. Asks the tree for one more
-    /// candidate than needed and widens the request while the last candidate ties with
-    /// the k-th, so ties at the cut are decided by index, not by the tree's layout.
-    fn nearest_unchecked(&self, query: u32, out: &mut [u32], cand: &mut Vec<(bool, f32, u32)>) {
-        let k = out.len();
-        let n = self.points.len();
-        let p = self.points[query as usize];
-        let mut want = (k + 1).min(n);
-        loop {
-            let found = self
-                .tree
-                .query(&p)
-                .nearest_n::<SquaredEuclidean<f32>>(
-                    NonZero::new(want).unwrap_or(NonZero::<usize>::MIN),
-                )
-                .execute();
-            cand.clear();
-            cand.extend(found.iter().map(|r| {
-                (
-                    r.item != query,
-                    dist2(p, self.points[r.item as usize]),
-                    r.item,
-                )
-            }));
-            // kiddo sorts by distance already: only ties and the query's own place
-            // move, so an insertion sort is linear here.
-            insertion_sort(cand);
-            if want == n || cand[k - 1].1 < cand[want - 1].1 {
-                break;
-            }
-            want = (want * 2).min(n);
-        }
-        for (o, c) in out.iter_mut().zip(cand.iter()) {
-            *o = c.2;
-        }
-    }
-}
-
-/// Sorts by [`neighbour_order`]; fast on nearly sorted input.
-fn insertion_sort(v: &mut [(bool, f32, u32)]) {
-    for i in 1..v.len() {
-        let mut j = i;
-        while j > 0 && neighbour_order(v[j - 1], v[j]).is_gt() {
-            v.swap(j - 1, j);
-            j -= 1;
-        }
-    }
 }
 
 /// Squared Euclidean distance in `f32`, the one metric every search path uses so that
@@ -203,14 +197,96 @@ pub(crate) fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
     d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
-/// Neighbour ordering: the query itself (`false` sorts first), then distance, then index.
-pub(crate) fn neighbour_order(a: (bool, f32, u32), b: (bool, f32, u32)) -> std::cmp::Ordering {
-    a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Neighbour ordering: the query itself (`false` sorts first), then distance, then index.
+    fn neighbour_order(a: (bool, f32, u32), b: (bool, f32, u32)) -> std::cmp::Ordering {
+        a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
+    }
+
+    /// SplitMix64 in [0, 1).
+    fn rng(seed: u64) -> impl FnMut() -> f32 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// A sphere surface, a dense blob, a line, exact duplicates and far outliers: every
+    /// search path (shared box, grown box, cells by distance) gets used.
+    fn mixed_cloud(n: usize) -> Vec<[f32; 3]> {
+        let mut r = rng(9);
+        let mut pts: Vec<[f32; 3]> = (0..n)
+            .map(|i| match i % 4 {
+                0 | 1 => {
+                    let (u, v) = (r() * std::f32::consts::TAU, r() * 2.0 - 1.0);
+                    let s = (1.0 - v * v).sqrt();
+                    [s * u.cos(), s * u.sin(), v]
+                }
+                2 => [0.1 * r(), 0.1 * r() + 3.0, 0.1 * r()],
+                _ => [r() * 4.0 - 2.0, -3.0, 1.0],
+            })
+            .collect();
+        pts.extend_from_slice(&[[50.0, 50.0, 50.0], [-40.0, 0.0, 7.0], [-40.0, 0.5, 7.0]]);
+        for i in 0..20 {
+            pts.push(pts[i * 7]);
+        }
+        pts
+    }
+
+    #[test]
+    fn matches_brute_force_on_a_mixed_cloud() {
+        let pts = mixed_cloud(1500);
+        let c = cloud(pts.clone());
+        let idx = KnnIndex::new(&c).unwrap();
+        for k in [1, 16, 70] {
+            let mut seen = 0;
+            idx.for_each_chunk(k, 500, |ch| {
+                for (j, &q) in ch.queries().iter().enumerate() {
+                    assert_eq!(ch.row(j), brute(&pts, q, k).as_slice(), "k {k} query {q}");
+                    seen += 1;
+                }
+            })
+            .unwrap();
+            assert_eq!(seen, pts.len());
+        }
+    }
+
+    #[test]
+    fn same_distances_as_kiddo() {
+        use kiddo::{ImmutableKdTree, SquaredEuclidean};
+        let pts = mixed_cloud(20_000);
+        let c = cloud(pts.clone());
+        let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&pts).unwrap();
+        let idx = KnnIndex::new(&c).unwrap();
+        let k = 32;
+        idx.for_each_chunk(k, 4096, |ch| {
+            for (j, &q) in ch.queries().iter().enumerate().step_by(7) {
+                let p = pts[q as usize];
+                let want = tree
+                    .query(&p)
+                    .nearest_n::<SquaredEuclidean<f32>>(std::num::NonZero::new(k).unwrap())
+                    .execute();
+                let got: Vec<f32> = ch
+                    .row(j)
+                    .iter()
+                    .map(|&i| dist2(p, pts[i as usize]))
+                    .collect();
+                let want: Vec<f32> = want
+                    .iter()
+                    .map(|r| dist2(p, pts[r.item as usize]))
+                    .collect();
+                assert_eq!(got, want, "query {q}");
+            }
+        })
+        .unwrap();
+    }
 
     fn cloud(points: Vec<[f32; 3]>) -> PointCloud {
         PointCloud::from_local([0.0; 3], points).unwrap()

@@ -24,6 +24,7 @@ mod class;
 mod cloud;
 mod eigen;
 mod error;
+mod grid;
 mod knn;
 mod morton;
 

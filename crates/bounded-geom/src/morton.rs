@@ -1,41 +1,73 @@
-//! Morton (Z-order) ordering of points, for spatially coherent processing.
+//! Morton (Z-order) codes: spatially coherent ordering and an implicit octree.
+//!
+//! Sorting points by their 63-bit code on a 2^21 grid sorts them by the cell of every
+//! coarser level at once (a level-`L` cell is a run of equal `code >> 3L`).
 
 use rayon::prelude::*;
 
 /// Bits per axis of the Morton code (3 x 21 = 63 bits).
-const BITS: u32 = 21;
+pub(crate) const BITS: u32 = 21;
+
+/// Maps coordinates to integer cells of a 2^21 grid over a bounding cube.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Quantiser {
+    /// Lower corner of the bounding box.
+    pub(crate) lo: [f64; 3],
+    /// Fine cells per unit length (0 when all points coincide).
+    pub(crate) inv: f64,
+}
+
+impl Quantiser {
+    pub(crate) fn new(points: &[[f32; 3]]) -> Self {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in points {
+            for a in 0..3 {
+                lo[a] = lo[a].min(f64::from(p[a]));
+                hi[a] = hi[a].max(f64::from(p[a]));
+            }
+        }
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+        let cells = f64::from((1u32 << BITS) - 1);
+        let inv = if extent > 0.0 { cells / extent } else { 0.0 };
+        Self { lo, inv }
+    }
+
+    /// Fine cell coordinates of `p`.
+    pub(crate) fn cell(&self, p: [f32; 3]) -> [u64; 3] {
+        [0, 1, 2].map(|a| ((f64::from(p[a]) - self.lo[a]) * self.inv) as u64)
+    }
+
+    /// Coordinate of the lower face of fine cell `c` along axis `a`.
+    pub(crate) fn face(&self, a: usize, c: u64) -> f64 {
+        self.lo[a] + c as f64 / self.inv
+    }
+}
+
+/// Morton code of fine cell coordinates.
+pub(crate) fn code(c: [u64; 3]) -> u64 {
+    spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2
+}
 
 /// Indices of `points` sorted by their Morton code on a 2^21 grid over the bounding
 /// box, ties by index. Consecutive indices are spatially close, so neighbouring
 /// queries touch the same memory.
 pub fn morton_order(points: &[[f32; 3]]) -> Vec<u32> {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in points {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    let cells = f64::from((1u32 << BITS) - 1);
-    let extent = (0..3)
-        .map(|a| f64::from(hi[a]) - f64::from(lo[a]))
-        .fold(0.0, f64::max);
-    let inv = if extent > 0.0 { cells / extent } else { 0.0 };
+    sorted_codes(points, &Quantiser::new(points))
+        .into_iter()
+        .map(|(_, i)| i)
+        .collect()
+}
+
+/// (code, index) pairs sorted by code, then index. Indices must fit in `u32`.
+pub(crate) fn sorted_codes(points: &[[f32; 3]], quant: &Quantiser) -> Vec<(u64, u32)> {
     let mut keyed: Vec<(u64, u32)> = points
         .par_iter()
         .enumerate()
-        .map(|(i, p)| {
-            let q = [0, 1, 2].map(|a| ((f64::from(p[a]) - f64::from(lo[a])) * inv) as u64);
-            // Truncation of an index < 2^32 (checked by the caller).
-            (
-                spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2,
-                i as u32,
-            )
-        })
+        .map(|(i, p)| (code(quant.cell(*p)), i as u32))
         .collect();
     keyed.par_sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
+    keyed
 }
 
 /// Spreads the low 21 bits of `v` so that bit `b` moves to bit `3b`.

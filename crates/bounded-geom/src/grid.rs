@@ -1,0 +1,276 @@
+//! A uniform grid over Morton-sorted points, with cell-batched exact kNN queries.
+//!
+//! Cells are cubes of one level of the implicit Morton octree, so each occupied cell is
+//! a contiguous run of the sorted points. All queries of a cell share one candidate set
+//! (the cells within `RING` of it); a query is answered from it when its `k` best
+//! candidates lie closer than the candidate box's nearest face, which makes the answer
+//! exact. Otherwise the box grows, and as a last resort (isolated points) cells are
+//! visited in order of distance.
+
+use std::ops::Range;
+
+use crate::knn::dist2;
+use crate::morton::{BITS, Quantiser, code};
+
+/// Cells on each side of the query cell in the shared candidate box.
+const RING: i64 = 2;
+/// Largest box (cells on each side) tried before visiting cells by distance.
+const MAX_RING: i64 = 4;
+/// Relative safety margin on squared distances against rounding of faces and distances.
+const MARGIN: f64 = 1e-4;
+
+/// Occupied cells of one level, over points sorted by Morton code.
+pub(crate) struct Grid {
+    level: u32,
+    /// Level codes of the occupied cells, ascending.
+    codes: Vec<u64>,
+    /// Start of each cell's run of sorted points (one extra entry: the end).
+    starts: Vec<u32>,
+    /// Largest cell coordinate on any axis.
+    max_cell: i64,
+}
+
+/// Candidate points in structure-of-arrays form, with original indices.
+#[derive(Default)]
+pub(crate) struct Candidates {
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
+    index: Vec<u32>,
+}
+
+/// Per-thread buffers of the search.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    shared: Candidates,
+    own: Candidates,
+    keys: Vec<u64>,
+    by_distance: Vec<(f64, u32)>,
+}
+
+/// The sorted points a grid indexes.
+pub(crate) struct Sorted<'a> {
+    pub(crate) quant: &'a Quantiser,
+    pub(crate) points: &'a [[f32; 3]],
+    /// Original index of each sorted point.
+    pub(crate) order: &'a [u32],
+}
+
+impl Grid {
+    /// The finest level whose occupied cells hold on average at least `k / 6` points:
+    /// on a surface the k-th neighbour then lies about 1.4 cells away, inside the
+    /// shared box of `RING` = 2 cells.
+    pub(crate) fn new(s: &Sorted<'_>, k: usize) -> Self {
+        let codes: Vec<u64> = s.points.iter().map(|p| code(s.quant.cell(*p))).collect();
+        // Consecutive codes first differ at bit b: different cells at levels <= b / 3.
+        let mut split_at = [0usize; BITS as usize + 1];
+        for w in codes.windows(2) {
+            if w[0] != w[1] {
+                split_at[((63 - (w[0] ^ w[1]).leading_zeros()) / 3) as usize] += 1;
+            }
+        }
+        let target = (k / 6).max(1);
+        let mut level = BITS;
+        let mut cells_above = 0;
+        for l in (0..=BITS).rev() {
+            cells_above += split_at[l as usize];
+            if codes.len() / (cells_above + 1) >= target {
+                level = l;
+            }
+        }
+        let mut grid = Self {
+            level,
+            codes: Vec::new(),
+            starts: Vec::new(),
+            max_cell: i64::from(((1u32 << BITS) - 1) >> level),
+        };
+        for (i, c) in codes.iter().enumerate() {
+            let c = c >> (3 * level);
+            if grid.codes.last() != Some(&c) {
+                grid.codes.push(c);
+                grid.starts.push(i as u32);
+            }
+        }
+        grid.starts.push(codes.len() as u32);
+        grid
+    }
+
+    /// Index of the cell holding sorted point `pos`.
+    pub(crate) fn cell_of(&self, pos: usize) -> usize {
+        self.starts.partition_point(|&s| s as usize <= pos) - 1
+    }
+
+    /// Sorted positions of cell `cell`'s points.
+    pub(crate) fn range(&self, cell: usize) -> Range<usize> {
+        self.starts[cell] as usize..self.starts[cell + 1] as usize
+    }
+
+    fn coords(&self, s: &Sorted<'_>, cell: usize) -> [i64; 3] {
+        s.quant
+            .cell(s.points[self.starts[cell] as usize])
+            .map(|c| (c >> self.level) as i64)
+    }
+
+    fn lookup(&self, c: [i64; 3]) -> Option<Range<usize>> {
+        if c.iter().any(|&v| v < 0 || v > self.max_cell) {
+            return None;
+        }
+        let i = self.codes.binary_search(&code(c.map(|v| v as u64))).ok()?;
+        Some(self.range(i))
+    }
+
+    /// Gathers the points of the cells within `r` of cell coordinates `c`.
+    fn gather(&self, s: &Sorted<'_>, c: [i64; 3], r: i64, out: &mut Candidates) {
+        out.xs.clear();
+        out.ys.clear();
+        out.zs.clear();
+        out.index.clear();
+        for z in c[2] - r..=c[2] + r {
+            for y in c[1] - r..=c[1] + r {
+                for x in c[0] - r..=c[0] + r {
+                    if let Some(range) = self.lookup([x, y, z]) {
+                        out.add(s, range);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Squared distance below which every point is in the box of radius `r` around
+    /// cell `c` (infinite when the box reaches past the grid on every side it faces).
+    fn limit(&self, s: &Sorted<'_>, c: [i64; 3], r: i64, p: [f32; 3]) -> f32 {
+        let mut bound = f64::INFINITY;
+        for a in 0..3 {
+            let x = f64::from(p[a]);
+            if c[a] - r > 0 {
+                bound = bound.min(x - s.quant.face(a, ((c[a] - r) as u64) << self.level));
+            }
+            if c[a] + r < self.max_cell {
+                bound = bound.min(s.quant.face(a, ((c[a] + r + 1) as u64) << self.level) - x);
+            }
+        }
+        if bound.is_infinite() || s.quant.inv == 0.0 {
+            return f32::INFINITY;
+        }
+        (bound.max(0.0).powi(2) * (1.0 - MARGIN)) as f32
+    }
+
+    /// Writes the `out.len()` nearest neighbours of the sorted points `queries` (all in
+    /// cell `cell`) to `rows` (row-major).
+    pub(crate) fn search_cell(
+        &self,
+        s: &Sorted<'_>,
+        cell: usize,
+        queries: Range<usize>,
+        rows: &mut [u32],
+        scratch: &mut Scratch,
+    ) {
+        let k = rows.len() / queries.len();
+        let c = self.coords(s, cell);
+        self.gather(s, c, RING, &mut scratch.shared);
+        for (pos, out) in queries.zip(rows.chunks_exact_mut(k)) {
+            let p = s.points[pos];
+            let q = s.order[pos];
+            if scratch
+                .shared
+                .best(p, q, self.limit(s, c, RING, p), &mut scratch.keys, out)
+            {
+                continue;
+            }
+            let solved = (RING + 1..=MAX_RING).any(|r| {
+                self.gather(s, c, r, &mut scratch.own);
+                let lim = self.limit(s, c, r, p);
+                scratch.own.best(p, q, lim, &mut scratch.keys, out)
+            });
+            if !solved {
+                self.by_distance(s, p, q, scratch, out);
+            }
+        }
+    }
+
+    /// Exact fallback for isolated points: visit cells by increasing distance.
+    fn by_distance(&self, s: &Sorted<'_>, p: [f32; 3], q: u32, sc: &mut Scratch, out: &mut [u32]) {
+        let k = out.len();
+        sc.by_distance.clear();
+        for cell in 0..self.codes.len() {
+            let c = self.coords(s, cell);
+            let mut d2 = 0.0;
+            for a in 0..3 {
+                let lo = s.quant.face(a, (c[a] as u64) << self.level);
+                let hi = s.quant.face(a, ((c[a] + 1) as u64) << self.level);
+                let x = f64::from(p[a]);
+                let d = (lo - x).max(x - hi).max(0.0);
+                d2 += d * d;
+            }
+            sc.by_distance.push((d2, cell as u32));
+        }
+        sc.by_distance.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let own = &mut sc.own;
+        own.xs.clear();
+        own.ys.clear();
+        own.zs.clear();
+        own.index.clear();
+        let mut reach = f64::INFINITY;
+        for &(d2, cell) in &sc.by_distance {
+            if d2 > reach {
+                break;
+            }
+            own.add(s, self.range(cell as usize));
+            if reach.is_infinite() && own.index.len() >= k {
+                own.best(p, q, f32::INFINITY, &mut sc.keys, out);
+                let kth = key_distance(sc.keys[k - 1]);
+                reach = f64::from(kth) * (1.0 + MARGIN);
+            }
+        }
+        own.best(p, q, f32::INFINITY, &mut sc.keys, out);
+    }
+}
+
+impl Candidates {
+    fn add(&mut self, s: &Sorted<'_>, range: Range<usize>) {
+        let pts = &s.points[range.clone()];
+        self.xs.extend(pts.iter().map(|p| p[0]));
+        self.ys.extend(pts.iter().map(|p| p[1]));
+        self.zs.extend(pts.iter().map(|p| p[2]));
+        self.index.extend_from_slice(&s.order[range]);
+    }
+
+    /// The `out.len()` best candidates for point `p` (original index `q`) among those
+    /// with squared distance below `lim`; false when there are too few.
+    ///
+    /// Keys order the query itself first (key 0), then by distance, then by index.
+    fn best(&self, p: [f32; 3], q: u32, lim: f32, keys: &mut Vec<u64>, out: &mut [u32]) -> bool {
+        let k = out.len();
+        keys.clear();
+        for (((&x, &y), &z), &i) in self.xs.iter().zip(&self.ys).zip(&self.zs).zip(&self.index) {
+            let d = dist2(p, [x, y, z]);
+            if d < lim {
+                keys.push(if i == q {
+                    0
+                } else {
+                    (u64::from(d.to_bits()) << 32 | u64::from(i)) + 1
+                });
+            }
+        }
+        if keys.len() < k {
+            return false;
+        }
+        if keys.len() > k {
+            keys.select_nth_unstable(k - 1);
+        }
+        keys[..k].sort_unstable();
+        for (o, &key) in out.iter_mut().zip(keys.iter()) {
+            *o = if key == 0 { q } else { (key - 1) as u32 };
+        }
+        true
+    }
+}
+
+/// Squared distance stored in a neighbour key.
+fn key_distance(key: u64) -> f32 {
+    if key == 0 {
+        0.0
+    } else {
+        f32::from_bits(((key - 1) >> 32) as u32)
+    }
+}
