@@ -5,7 +5,7 @@
 //! shared by three or more faces) is sharp. Smooth surfaces are tessellated finely enough
 //! that every edge between their faces stays far below that angle.
 
-use super::grid::Grid;
+use super::grid::{Grid, bounds};
 use super::vec3::{V3, cross, dot, norm, normalize, scale, sub};
 
 /// Two faces meeting at more than this deviation from flat (degrees) form a sharp crease.
@@ -159,14 +159,7 @@ impl Mesh {
 
     /// Bounding-box diagonal.
     pub(crate) fn diagonal(&self) -> f64 {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for v in &self.vertices {
-            for a in 0..3 {
-                lo[a] = lo[a].min(v[a]);
-                hi[a] = hi[a].max(v[a]);
-            }
-        }
+        let [lo, hi] = bounds(self.vertices.iter().copied());
         norm(sub(hi, lo))
     }
 
@@ -183,7 +176,7 @@ impl Mesh {
     /// feature extraction needs.
     pub(crate) fn welded(&self) -> Mesh {
         let tol = 1e-9 * self.diagonal().max(f64::MIN_POSITIVE);
-        let mut grid = Grid::new(tol);
+        let mut grid = Grid::new(tol, bounds(self.vertices.iter().copied()));
         let mut remap = Vec::with_capacity(self.vertices.len());
         for &v in &self.vertices {
             let mut hit = None;

@@ -2,7 +2,7 @@
 //!
 //! Labels stay those of the clean positions, as in the noisy evaluation sets.
 
-use super::grid::Grid;
+use super::grid::{Grid, bounds};
 use super::sample::random_direction;
 use super::vec3::{V3, add, normalize, scale};
 use bounded_geom::Class;
@@ -12,7 +12,7 @@ use rand_distr::StandardNormal;
 /// Median nearest-neighbour distance; `hint` is a rough guess of it (the query reach is
 /// twice the hint, so points further than that from all others are ignored).
 pub(crate) fn median_spacing(points: &[V3], hint: f64) -> f64 {
-    let mut grid = Grid::new(2.0 * hint);
+    let mut grid = Grid::new(2.0 * hint, bounds(points.iter().copied()));
     for &p in points {
         grid.insert(p);
     }

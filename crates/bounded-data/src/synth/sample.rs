@@ -12,7 +12,7 @@
 //! Both modes vary the density linearly across a shape (up to 1.6 : 0.4), so the spacing
 //! differs somewhat within a shape as well as between shapes.
 
-use super::grid::Grid;
+use super::grid::{Grid, bounds};
 use super::mesh::{Features, Mesh, Polyline};
 use super::vec3::{V3, add, dot, lerp, norm, normalize, scale, segment_distance, sub};
 use bounded_geom::Class;
@@ -176,7 +176,10 @@ fn mesh_vertex(
     let (attempts_per_area, fill_density) = FILL_LEVELS[rng.random_range(0..FILL_LEVELS.len())];
     let r0 = (fill_density * surface.weighted_area / target as f64).sqrt();
     let radius = |p: V3| r0 / density.factor(p).sqrt();
-    let mut grid = Grid::new(r0 / (1.0 - density.gradient).sqrt());
+    let mut grid = Grid::new(
+        r0 / (1.0 - density.gradient).sqrt(),
+        bounds(surface.mesh.vertices.iter().copied()),
+    );
     let mut labels = Vec::with_capacity(target + target / 4);
     // Crease rows are a little sparser than the minimum distance, like the face points'
     // typical nearest-neighbour distance.
@@ -246,8 +249,9 @@ fn random(
     // Points per unit area at p is target * factor(p) / weighted_area.
     let spacing = |p: V3| (surface.weighted_area / (target as f64 * density.factor(p))).sqrt();
     let widest = spacing_max(surface, density, target);
-    let sharp = SegmentIndex::new(&features.sharp, W_SHARP * widest);
-    let border = SegmentIndex::new(&features.border, W_BORDER * widest);
+    let box_ = bounds(surface.mesh.vertices.iter().copied());
+    let sharp = SegmentIndex::new(&features.sharp, W_SHARP * widest, box_);
+    let border = SegmentIndex::new(&features.border, W_BORDER * widest, box_);
     let mut points = Vec::with_capacity(target);
     let mut labels = Vec::with_capacity(target);
     while points.len() < target {
@@ -284,10 +288,10 @@ struct SegmentIndex {
 }
 
 impl SegmentIndex {
-    /// An index answering distance queries up to `max_radius`.
-    fn new(lines: &[Polyline], max_radius: f64) -> Self {
+    /// An index answering distance queries up to `max_radius` around the box `box_`.
+    fn new(lines: &[Polyline], max_radius: f64, box_: [V3; 2]) -> Self {
         // A point within max_radius of a piece is within 1.5 max_radius of its midpoint.
-        let mut grid = Grid::new(2.0 * max_radius);
+        let mut grid = Grid::new(2.0 * max_radius, box_);
         let mut pieces = Vec::new();
         for (a, b) in lines.iter().flat_map(Polyline::segments) {
             let k = (norm(sub(b, a)) / max_radius).ceil().max(1.0) as usize;
