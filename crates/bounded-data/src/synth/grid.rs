@@ -74,7 +74,7 @@ impl Grid {
         let lo_cell = lo.map(|c| (c / cell).floor());
         let dims = [0, 1, 2].map(|a| (hi[a] / cell).floor() - lo_cell[a] + 1.0);
         let count = dims.iter().product::<f64>();
-        let heads = if count.is_finite() && count >= 1.0 && count <= DENSE_CELLS {
+        let heads = if (1.0..=DENSE_CELLS).contains(&count) {
             Heads::Dense {
                 lo: lo_cell.map(|c| c as i64),
                 dims: dims.map(|d| d as i64),
