@@ -168,13 +168,18 @@ impl Grid {
         let k = rows.len() / queries.len();
         let c = self.coords(s, cell);
         self.gather(s, c, RING, &mut scratch.shared);
+        // The previous query's k-th distance predicts this one's: filtering candidates
+        // at 1.5 times it (never beyond the box's exact limit) shrinks the selection.
+        let mut guess = f32::INFINITY;
         for (pos, out) in queries.zip(rows.chunks_exact_mut(k)) {
             let p = s.points[pos];
             let q = s.order[pos];
-            if scratch
-                .shared
-                .best(p, q, self.limit(s, c, RING, p), &mut scratch.keys, out)
+            let exact = self.limit(s, c, RING, p);
+            let keys = &mut scratch.keys;
+            if (guess < exact && scratch.shared.best(p, q, guess, keys, out))
+                || scratch.shared.best(p, q, exact, keys, out)
             {
+                guess = key_distance(keys[k - 1]) * 1.5;
                 continue;
             }
             let solved = (RING + 1..=MAX_RING).any(|r| {
@@ -241,18 +246,17 @@ impl Candidates {
     /// Keys order the query itself first (key 0), then by distance, then by index.
     fn best(&self, p: [f32; 3], q: u32, lim: f32, keys: &mut Vec<u64>, out: &mut [u32]) -> bool {
         let k = out.len();
-        keys.clear();
+        // Branch-free filter: always write, advance only for kept keys.
+        keys.resize(self.index.len(), 0);
+        let mut kept = 0;
         for (((&x, &y), &z), &i) in self.xs.iter().zip(&self.ys).zip(&self.zs).zip(&self.index) {
             let d = dist2(p, [x, y, z]);
-            if d < lim {
-                keys.push(if i == q {
-                    0
-                } else {
-                    (u64::from(d.to_bits()) << 32 | u64::from(i)) + 1
-                });
-            }
+            let key = (u64::from(d.to_bits()) << 32 | u64::from(i)) + 1;
+            keys[kept] = if i == q { 0 } else { key };
+            kept += usize::from(d < lim);
         }
-        if keys.len() < k {
+        keys.truncate(kept);
+        if kept < k {
             return false;
         }
         if keys.len() > k {
