@@ -12,7 +12,9 @@ pub(crate) struct Scratch {
     /// Neighbours relative to the query point, in `f64`.
     local: Vec<[f64; 3]>,
     /// (squared distance to the centroid, rank) for the normal's half neighbourhood.
-    near_centroid: Vec<(f64, u32)>,
+    near_centroid: Vec<(u64, u32)>,
+    /// Moments of each scale's neighbourhood, smallest scale first.
+    prefix: Vec<Moments>,
 }
 
 impl Scratch {
@@ -20,6 +22,7 @@ impl Scratch {
         Self {
             local: Vec::with_capacity(k0),
             near_centroid: Vec::with_capacity(k0),
+            prefix: Vec::new(),
         }
     }
 }
@@ -117,15 +120,17 @@ pub(crate) fn point_features(
         [0, 1, 2].map(|a| f64::from(q[a]) - p[a])
     }));
     let local = &scratch.local;
-    let whole = Moments::of(local.iter().copied());
+    // Moments of every scale from one pass: scales are prefixes, smallest first.
+    scratch.prefix.clear();
+    let mut running = Moments::default();
+    for &k in config.scales.iter().rev() {
+        local[running.n..k].iter().for_each(|&q| running.add(q));
+        scratch.prefix.push(running);
+    }
     let mut largest: Option<(Moments, Frame)> = None;
     let per_scale = config.features_per_scale();
-    for (&k, out) in config.scales.iter().zip(out.chunks_exact_mut(per_scale)) {
-        let moments = if k == whole.n {
-            whole
-        } else {
-            Moments::of(local[..k].iter().copied())
-        };
+    let scales = config.scales.iter().zip(scratch.prefix.iter().rev());
+    for ((&k, &moments), out) in scales.zip(out.chunks_exact_mut(per_scale)) {
         let frame = frame(&local[..k], &moments, &mut scratch.near_centroid);
         let mut all = scale_features(&local[..k], &moments, &frame);
         if let Some((m0, f0)) = &largest {
@@ -155,7 +160,7 @@ struct Frame {
 
 /// Centroid, normalisation and oriented normal of `pts` (relative to the query point,
 /// which is therefore the origin), whose moments are `moments`.
-fn frame(pts: &[[f64; 3]], moments: &Moments, near_centroid: &mut Vec<(f64, u32)>) -> Frame {
+fn frame(pts: &[[f64; 3]], moments: &Moments, near_centroid: &mut Vec<(u64, u32)>) -> Frame {
     let m = moments.mean();
     let variances = moments.variances();
     let scale = 2.0 / (variances[0].sqrt() + variances[1].sqrt());
@@ -166,9 +171,13 @@ fn frame(pts: &[[f64; 3]], moments: &Moments, near_centroid: &mut Vec<(f64, u32)
         [0.0, 0.0, 1.0]
     } else {
         near_centroid.clear();
-        near_centroid.extend(pts.iter().zip(0u32..).map(|(q, j)| (dist2(*q, m), j)));
-        near_centroid
-            .select_nth_unstable_by(half - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        // Non-negative f64 bits order like the values: integer keys, ties by rank.
+        near_centroid.extend(
+            pts.iter()
+                .zip(0u32..)
+                .map(|(q, j)| (dist2(*q, m).to_bits(), j)),
+        );
+        near_centroid.select_nth_unstable(half - 1);
         Moments::of(near_centroid[..half].iter().map(|&(_, j)| pts[j as usize]))
             .covariance()
             .eigen()

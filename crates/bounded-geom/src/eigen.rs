@@ -65,8 +65,10 @@ impl Sym3 {
             + self.xz * (self.xy * self.yz - b * self.xz);
         let r = (det / (2.0 * p * p * p)).clamp(-1.0, 1.0);
         let phi = r.acos() / 3.0;
-        let largest = q + 2.0 * p * phi.cos();
-        let smallest = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+        let (sin, cos) = phi.sin_cos();
+        let largest = q + 2.0 * p * cos;
+        // cos(phi + 2 pi / 3) = -(cos + sqrt(3) sin) / 2.
+        let smallest = q - p * (cos + 3f64.sqrt() * sin);
         let middle = (3.0 * q - largest - smallest).clamp(smallest, largest);
         [largest, middle, smallest]
     }
