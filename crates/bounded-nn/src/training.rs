@@ -6,7 +6,7 @@ use std::time::Instant;
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::prelude::*;
 use rand::SeedableRng;
-use rand::rngs::StdRng;
+use rand::rngs::{SmallRng, StdRng};
 
 use crate::backend::read_f32;
 use crate::data::{BatchSampler, Dataset, Sampling, split_validation};
@@ -135,9 +135,12 @@ pub fn train(
     for run in 0..config.runs {
         let run_seed = config.seed.wrapping_add(run as u64);
         let device = plain.clone().autodiff();
-        let mut run_rng = StdRng::seed_from_u64(run_seed);
-        let weights = config.model.random_weights(&mut run_rng);
+        let weights = config
+            .model
+            .random_weights(&mut StdRng::seed_from_u64(run_seed));
         let mut model = config.model.init(&standardisation, &weights, &device)?;
+        // Half a million dropout decisions per batch: a small fast generator, seeded per run.
+        let mut dropout_rng = SmallRng::seed_from_u64(run_seed);
         let mut optim = AdamConfig::new()
             .with_beta_1(config.beta_1)
             .with_beta_2(config.beta_2)
@@ -157,7 +160,9 @@ pub fn train(
             );
             let y =
                 Tensor::<1, Int>::from_data(TensorData::new(std::mem::take(&mut ys), [n]), &device);
-            let loss = config.loss.forward(model.forward_train(x, &mut run_rng), y);
+            let loss = config
+                .loss
+                .forward(model.forward_train(x, &mut dropout_rng), y);
             let grads = GradientsParams::from_grads(loss.backward(), &model);
             model = optim.step(config.learning_rate, model, grads);
             let loss = scalar(loss)?;
