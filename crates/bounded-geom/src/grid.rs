@@ -30,14 +30,20 @@ pub(crate) struct Grid {
     max_cell: i64,
 }
 
-/// Candidate points in structure-of-arrays form, with original indices.
+/// Candidate points in structure-of-arrays form, with original indices, grouped by
+/// cell so that a query can skip whole cells beyond its distance limit.
 #[derive(Default)]
 pub(crate) struct Candidates {
     xs: Vec<f32>,
     ys: Vec<f32>,
     zs: Vec<f32>,
     index: Vec<u32>,
+    /// Per cell: end of its points in the arrays above, and its box.
+    cells: Vec<(usize, CellBox)>,
 }
+
+/// Lower and upper corner of a cell.
+type CellBox = ([f64; 3], [f64; 3]);
 
 /// Per-thread buffers of the search.
 #[derive(Default)]
@@ -121,19 +127,22 @@ impl Grid {
 
     /// Gathers the points of the cells within `r` of cell coordinates `c`.
     fn gather(&self, s: &Sorted<'_>, c: [i64; 3], r: i64, out: &mut Candidates) {
-        out.xs.clear();
-        out.ys.clear();
-        out.zs.clear();
-        out.index.clear();
+        out.clear();
         for z in c[2] - r..=c[2] + r {
             for y in c[1] - r..=c[1] + r {
                 for x in c[0] - r..=c[0] + r {
                     if let Some(range) = self.lookup([x, y, z]) {
-                        out.add(s, range);
+                        out.add(s, range, self.cell_box(s, [x, y, z]));
                     }
                 }
             }
         }
+    }
+
+    fn cell_box(&self, s: &Sorted<'_>, c: [i64; 3]) -> CellBox {
+        let lo = [0, 1, 2].map(|a| s.quant.face(a, (c[a] as u64) << self.level));
+        let hi = [0, 1, 2].map(|a| s.quant.face(a, ((c[a] + 1) as u64) << self.level));
+        (lo, hi)
     }
 
     /// Squared distance below which every point is in the box of radius `r` around
@@ -198,29 +207,19 @@ impl Grid {
         let k = out.len();
         sc.by_distance.clear();
         for cell in 0..self.codes.len() {
-            let c = self.coords(s, cell);
-            let mut d2 = 0.0;
-            for a in 0..3 {
-                let lo = s.quant.face(a, (c[a] as u64) << self.level);
-                let hi = s.quant.face(a, ((c[a] + 1) as u64) << self.level);
-                let x = f64::from(p[a]);
-                let d = (lo - x).max(x - hi).max(0.0);
-                d2 += d * d;
-            }
+            let d2 = box_distance2(p, &self.cell_box(s, self.coords(s, cell)));
             sc.by_distance.push((d2, cell as u32));
         }
         sc.by_distance.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
         let own = &mut sc.own;
-        own.xs.clear();
-        own.ys.clear();
-        own.zs.clear();
-        own.index.clear();
+        own.clear();
         let mut reach = f64::INFINITY;
         for &(d2, cell) in &sc.by_distance {
             if d2 > reach {
                 break;
             }
-            own.add(s, self.range(cell as usize));
+            let cell = cell as usize;
+            own.add(s, self.range(cell), self.cell_box(s, self.coords(s, cell)));
             if reach.is_infinite() && own.index.len() >= k {
                 own.best(p, q, f32::INFINITY, &mut sc.keys, out);
                 let kth = key_distance(sc.keys[k - 1]);
@@ -232,12 +231,21 @@ impl Grid {
 }
 
 impl Candidates {
-    fn add(&mut self, s: &Sorted<'_>, range: Range<usize>) {
+    fn clear(&mut self) {
+        self.xs.clear();
+        self.ys.clear();
+        self.zs.clear();
+        self.index.clear();
+        self.cells.clear();
+    }
+
+    fn add(&mut self, s: &Sorted<'_>, range: Range<usize>, cell: CellBox) {
         let pts = &s.points[range.clone()];
         self.xs.extend(pts.iter().map(|p| p[0]));
         self.ys.extend(pts.iter().map(|p| p[1]));
         self.zs.extend(pts.iter().map(|p| p[2]));
         self.index.extend_from_slice(&s.order[range]);
+        self.cells.push((self.index.len(), cell));
     }
 
     /// The `out.len()` best candidates for point `p` (original index `q`) among those
@@ -249,11 +257,21 @@ impl Candidates {
         // Branch-free filter: always write, advance only for kept keys.
         keys.resize(self.index.len(), 0);
         let mut kept = 0;
-        for (((&x, &y), &z), &i) in self.xs.iter().zip(&self.ys).zip(&self.zs).zip(&self.index) {
-            let d = dist2(p, [x, y, z]);
-            let key = (u64::from(d.to_bits()) << 32 | u64::from(i)) + 1;
-            keys[kept] = if i == q { 0 } else { key };
-            kept += usize::from(d < lim);
+        let mut begin = 0;
+        for (end, cell) in &self.cells {
+            let range = std::mem::replace(&mut begin, *end)..*end;
+            // Skip cells whose every point is beyond the limit (with a rounding margin).
+            if box_distance2(p, cell) * (1.0 - MARGIN) >= f64::from(lim) {
+                continue;
+            }
+            let xyz = self.xs[range.clone()].iter().zip(&self.ys[range.clone()]);
+            let xyz = xyz.zip(&self.zs[range.clone()]).zip(&self.index[range]);
+            for (((&x, &y), &z), &i) in xyz {
+                let d = dist2(p, [x, y, z]);
+                let key = (u64::from(d.to_bits()) << 32 | u64::from(i)) + 1;
+                keys[kept] = if i == q { 0 } else { key };
+                kept += usize::from(d < lim);
+            }
         }
         keys.truncate(kept);
         if kept < k {
@@ -268,6 +286,17 @@ impl Candidates {
         }
         true
     }
+}
+
+/// Squared distance from `p` to the nearest point of `cell` (0 inside).
+fn box_distance2(p: [f32; 3], cell: &CellBox) -> f64 {
+    (0..3)
+        .map(|a| {
+            let x = f64::from(p[a]);
+            let d = (cell.0[a] - x).max(x - cell.1[a]).max(0.0);
+            d * d
+        })
+        .sum()
 }
 
 /// Squared distance stored in a neighbour key.
