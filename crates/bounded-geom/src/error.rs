@@ -30,4 +30,12 @@ pub enum GeomError {
         /// Number of points in the cloud.
         points: usize,
     },
+    /// A point index past the end of the cloud.
+    #[error("point {index} does not exist: the cloud has {points} points")]
+    NoSuchPoint {
+        /// The index asked for.
+        index: usize,
+        /// Number of points in the cloud.
+        points: usize,
+    },
 }

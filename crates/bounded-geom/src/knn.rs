@@ -113,16 +113,16 @@ impl KnnIndex {
     ///
     /// A spot check: it builds a grid for `k` and costs `O(n)`; use
     /// [`for_each_chunk`](Self::for_each_chunk) for many points. Fails like
-    /// `for_each_chunk` for a bad `k`, and with `TooFewPoints` for a `query` out of range.
+    /// `for_each_chunk` for a bad `k`, and with `NoSuchPoint` for a `query` out of range.
     pub fn nearest(&self, query: u32, out: &mut [u32]) -> Result<(), GeomError> {
         self.check_k(out.len())?;
         let pos = self
             .order
             .iter()
             .position(|&i| i == query)
-            .ok_or(GeomError::TooFewPoints {
+            .ok_or(GeomError::NoSuchPoint {
+                index: query as usize,
                 points: self.len(),
-                k: query as usize + 1,
             })?;
         let sorted = self.sorted();
         let grid = Grid::new(&sorted, out.len());
@@ -364,6 +364,20 @@ mod tests {
         let mut out = [0u32; 9];
         idx.nearest(0, &mut out).unwrap();
         assert_eq!(out.to_vec(), brute(&pts, 0, 9));
+    }
+
+    #[test]
+    fn unknown_query_is_an_error() {
+        let c = cloud(grid(2));
+        let idx = KnnIndex::new(&c).unwrap();
+        let e = idx.nearest(4, &mut [0; 2]).unwrap_err();
+        assert_eq!(
+            e,
+            GeomError::NoSuchPoint {
+                index: 4,
+                points: 4
+            }
+        );
     }
 
     #[test]
