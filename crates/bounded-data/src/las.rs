@@ -171,7 +171,7 @@ pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
     names.extend(extras.iter().map(|(n, _)| n.clone()));
     slots.extend(extras.iter().map(|(_, s)| *s));
     let total = header.number_of_points();
-    let capacity = usize::try_from(total.min(crate::records::BLOCK as u64)).unwrap_or(0);
+    let capacity = usize::try_from(total.min(4096)).unwrap_or(0);
     let mut columns: Vec<Column> = slots
         .iter()
         .map(|s| match *s {
@@ -183,7 +183,7 @@ pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
     let mut done = 0u64;
     while done < total {
         let n = reader
-            .fill_points(crate::records::BLOCK as u64, &mut data)
+            .fill_points(crate::records::block_len(record_len) as u64, &mut data)
             .map_err(|e| {
                 DataError::malformed(
                     path,
@@ -398,10 +398,9 @@ pub fn write_to<W: Write + Seek + Send + Sync + 'static>(
     let record_len = usize::from(format.len());
     let mut first = 0;
     while first < view.len() {
-        let n = (view.len() - first).min(crate::records::BLOCK);
+        let n = (view.len() - first).min(crate::records::block_len(record_len));
         let mut bytes = vec![0u8; n * record_len];
-        encode_positions(view, first, &mut bytes, record_len, &transforms)
-            .map_err(&invalid)?;
+        encode_positions(view, first, &mut bytes, record_len, &transforms).map_err(&invalid)?;
         for (name, slot) in &standard {
             encode_standard(view, name, *slot, first, &mut bytes, record_len);
         }

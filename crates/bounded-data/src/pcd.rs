@@ -177,7 +177,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
     let n = header.points;
     let mut columns: Vec<Column> = types
         .iter()
-        .map(|&ty| Column::with_capacity(ty, n.min(crate::records::BLOCK)))
+        .map(|&ty| Column::with_capacity(ty, n.min(4096)))
         .collect();
     match header.data {
         Data::Ascii => read_ascii(&mut input, n, &mut columns, header.lines, path)?,

@@ -219,7 +219,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
     // Never trust the header count for allocation: a corrupt count must not exhaust memory.
     let mut columns: Vec<Column> = types
         .iter()
-        .map(|&ty| Column::with_capacity(ty, count.min(crate::records::BLOCK)))
+        .map(|&ty| Column::with_capacity(ty, count.min(4096)))
         .collect();
     match header.encoding.endian() {
         None => {

@@ -9,6 +9,13 @@ use std::path::Path;
 /// Records decoded or encoded per block: 64k records keep the buffer in cache-friendly
 /// megabytes while amortising the per-block column dispatch.
 pub(crate) const BLOCK: usize = 1 << 16;
+
+/// Records per block for records of `stride` bytes: [`BLOCK`], or fewer so that a block
+/// stays within 4 MiB however wide the records (a corrupt header must not exhaust memory).
+pub(crate) fn block_len(stride: usize) -> usize {
+    ((4 << 20) / stride.max(1)).clamp(1, BLOCK)
+}
+
 /// Header lines longer than this are rejected (guards against reading a binary blob as
 /// one "line").
 pub(crate) const MAX_HEADER_LINE: u64 = 64 * 1024;
@@ -32,7 +39,10 @@ pub(crate) fn read_line(
     if buf.last() == Some(&b'\n') {
         buf.pop();
     } else if n as u64 == MAX_HEADER_LINE {
-        return Err(DataError::malformed(path, "header line too long"));
+        return Err(DataError::malformed(
+            path,
+            format!("a line is longer than {MAX_HEADER_LINE} bytes"),
+        ));
     }
     if buf.last() == Some(&b'\r') {
         buf.pop();
@@ -98,10 +108,11 @@ pub(crate) fn read_records(
             Some(o)
         })
         .collect();
-    let mut buf = vec![0u8; stride * count.min(BLOCK)];
+    let block_len = block_len(stride);
+    let mut buf = vec![0u8; stride * count.min(block_len)];
     let mut done = 0;
     while done < count {
-        let n = (count - done).min(BLOCK);
+        let n = (count - done).min(block_len);
         let block = &mut buf[..n * stride];
         input.read_exact(block).map_err(|e| {
             truncated(
@@ -163,10 +174,11 @@ pub(crate) fn write_records(
             .iter()
             .map(|p| p.values.scalar_type().size())
             .sum::<usize>();
-    let mut buf = vec![0u8; stride * view.len().min(BLOCK)];
+    let block_len = block_len(stride);
+    let mut buf = vec![0u8; stride * view.len().min(block_len)];
     let mut first = 0;
     while first < view.len() {
-        let n = (view.len() - first).min(BLOCK);
+        let n = (view.len() - first).min(block_len);
         let block = &mut buf[..n * stride];
         match position {
             ScalarType::F32 => encode_positions::<f32>(view, first, block, stride, endian),
