@@ -13,6 +13,22 @@
 //! | `red`, `green`, `blue` | uchar | sharp (255,0,0), boundary (0,255,0), non-edge (160,160,160) |
 //!
 //! LAS stores `class` in the Classification field instead (see [`crate::las`]).
+//!
+//! ```
+//! use bounded_data::LabelledCloud;
+//! use bounded_data::format::{read, write_labelled};
+//! use bounded_data::labels::{Convention, from_table};
+//! use bounded_geom::{Class, PointCloud};
+//!
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("two.ply");
+//! let cloud = PointCloud::from_f64(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]).unwrap();
+//! let labelled = LabelledCloud { cloud, labels: vec![Class::Sharp, Class::NonEdge] };
+//! write_labelled(&path, &labelled).unwrap();
+//! let table = read(&path).unwrap();
+//! assert_eq!(table.len(), 2);
+//! assert_eq!(from_table(table, Convention::ClassProperty, &path).unwrap(), labelled);
+//! ```
 
 use crate::table::{Column, PointTable, PositionType, Property, TableView};
 use crate::{DataError, LabelledCloud};

@@ -203,13 +203,15 @@ pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
         done += n;
     }
     let t = header.transforms();
-    let (x, y, z) = (&columns[0], &columns[1], &columns[2]);
+    let (Column::I32(x), Column::I32(y), Column::I32(z)) = (&columns[0], &columns[1], &columns[2])
+    else {
+        return Err(DataError::malformed(
+            path,
+            "LAS: coordinates not decoded as integers",
+        ));
+    };
     let cloud = bounded_geom::PointCloud::from_iter_f64(x.len(), |i| {
-        [
-            t.x.direct(x.get_f64(i) as i32),
-            t.y.direct(y.get_f64(i) as i32),
-            t.z.direct(z.get_f64(i) as i32),
-        ]
+        [t.x.direct(x[i]), t.y.direct(y[i]), t.z.direct(z[i])]
     })
     .map_err(|source| DataError::Geom {
         path: path.to_path_buf(),
@@ -219,9 +221,9 @@ pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
         .into_iter()
         .zip(columns)
         .skip(3)
-        .filter(|(name, values)| {
-            !OPTIONAL_FLAGS.contains(&name.as_str())
-                || (0..values.len()).any(|i| values.get_f64(i) != 0.0)
+        .filter(|(name, values)| match values {
+            Column::U8(v) if OPTIONAL_FLAGS.contains(&name.as_str()) => v.iter().any(|&b| b != 0),
+            _ => true,
         })
         .map(|(name, values)| Property::new(name, values))
         .collect();

@@ -495,8 +495,17 @@ pub(crate) fn split_positions(
     let all_f32 = [&x, &y, &z]
         .iter()
         .all(|c| c.scalar_type() == ScalarType::F32);
-    let cloud = PointCloud::from_iter_f64(x.len(), |i| [x.get_f64(i), y.get_f64(i), z.get_f64(i)])
-        .map_err(PositionError::Geom)?;
+    // Typed fast paths for the common cases: no per-value dispatch in the hot loop.
+    let cloud = match (&x, &y, &z) {
+        (Column::F32(x), Column::F32(y), Column::F32(z)) => {
+            PointCloud::from_iter_f64(x.len(), |i| [x[i], y[i], z[i]].map(f64::from))
+        }
+        (Column::F64(x), Column::F64(y), Column::F64(z)) => {
+            PointCloud::from_iter_f64(x.len(), |i| [x[i], y[i], z[i]])
+        }
+        _ => PointCloud::from_iter_f64(x.len(), |i| [x.get_f64(i), y.get_f64(i), z.get_f64(i)]),
+    }
+    .map_err(PositionError::Geom)?;
     let position_type = if all_f32 {
         PositionType::F32
     } else {
