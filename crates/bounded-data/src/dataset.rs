@@ -149,7 +149,7 @@ fn malformed(path: &Path, line: usize, what: &str) -> DataError {
 }
 
 /// The cloud files directly in `dir`, by extension, sorted.
-fn cloud_files(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
+pub fn cloud_files(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
     let io = |source| DataError::Io {
         path: dir.to_path_buf(),
         source,

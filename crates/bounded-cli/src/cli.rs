@@ -1,0 +1,204 @@
+//! Command-line arguments.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Find sharp edges and boundaries in 3D point clouds, from positions alone.
+#[derive(Debug, Parser)]
+#[command(name = "bounded", version, about, long_about = None)]
+pub struct Cli {
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Label every point of a cloud: non-edge, sharp edge or boundary.
+    ///
+    /// Example: bounded detect scan.las -o labelled.las
+    Detect(DetectArgs),
+    /// Train a classifier on labelled clouds or a generated set.
+    ///
+    /// Example: bounded train --data generated/ -o my.bmodel
+    Train(TrainArgs),
+    /// Score a model on labelled clouds (per model and medians).
+    ///
+    /// Example: bounded eval --data ../shared/datasets/pcednet/default --peers ../shared/datasets/pcednet/peers.csv
+    Eval(EvalArgs),
+    /// Generate a synthetic labelled set (binary PLY with a `class` property).
+    ///
+    /// Example: bounded generate --kind mixed -o generated/ --seed 1
+    Generate(GenerateArgs),
+    /// Draw a cloud as a shaded picture, coloured by class.
+    ///
+    /// Example: bounded render labelled.ply -o labelled.png
+    Render(RenderArgs),
+    /// No files needed: generate a scene, detect, write demo.ply and demo.png, print scores.
+    Demo(DemoArgs),
+    /// Reproduce the paper's tables next to the published peers; writes a markdown report and plots.
+    Bench(BenchArgs),
+}
+
+/// Arguments of `detect`.
+#[derive(Debug, Args)]
+pub struct DetectArgs {
+    /// Input cloud (.ply .pcd .xyz .txt .csv .las .laz).
+    pub input: PathBuf,
+    /// Output cloud; the format follows the extension.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Model file (default: the embedded model).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Neighbourhood sizes, largest first, overriding the model's (same count as the model's).
+    #[arg(long, value_delimiter = ',')]
+    pub scales: Option<Vec<usize>>,
+}
+
+/// Arguments of `train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Training data: directories of labelled clouds, or `generated:KIND:SEED[:SHAPES]` for a
+    /// synthetic set made on the fly. Repeat to combine.
+    #[arg(long, required = true)]
+    pub data: Vec<String>,
+    /// Output model file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Training iterations per run.
+    #[arg(long, default_value_t = 3000)]
+    pub iterations: usize,
+    /// Independent runs; the one with the lowest validation loss is kept.
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+    /// Seed of the first run (run r uses seed + r).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Neighbourhood sizes, largest first.
+    #[arg(long, value_delimiter = ',', default_value = "128,64,32,16")]
+    pub scales: Vec<usize>,
+    /// Feature groups per scale.
+    #[arg(long, value_delimiter = ',', default_value = "sigma-u,sigma-l,d,s,c")]
+    pub features: Vec<FeatureGroupArg>,
+}
+
+/// A feature group on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FeatureGroupArg {
+    /// Eigenvalues of the upper set's covariance (3).
+    SigmaU,
+    /// Eigenvalues of the lower set's covariance (3).
+    SigmaL,
+    /// Difference of the upper and lower means (2).
+    D,
+    /// Position of the point in its neighbourhood (2).
+    S,
+    /// Multi-scale centroid shift (2).
+    C,
+}
+
+/// Arguments of `eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// Model file (default: the embedded model).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Directory of labelled clouds (PCEDNet colours, Bazazian colours or a `class` property).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Published peers (peers.csv) to print side by side on the same models.
+    #[arg(long)]
+    pub peers: Option<PathBuf>,
+    /// Count PCEDNet's smooth edges as sharp instead of non-edge.
+    #[arg(long)]
+    pub smooth_as_sharp: bool,
+    /// Positive class of the scores.
+    #[arg(long, value_enum, default_value_t = PositiveArg::Sharp)]
+    pub positive: PositiveArg,
+}
+
+/// The positive class of binary scores.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PositiveArg {
+    /// Sharp edges.
+    Sharp,
+    /// Boundaries.
+    Boundary,
+}
+
+/// Arguments of `generate`.
+#[derive(Debug, Args)]
+pub struct GenerateArgs {
+    /// Which kind of set.
+    #[arg(long, default_value = "mixed")]
+    pub kind: String,
+    /// Output directory (created).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Seed: the same seed gives the same files.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Number of shapes.
+    #[arg(long)]
+    pub shapes: Option<usize>,
+}
+
+/// Arguments of `render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Input cloud.
+    pub input: PathBuf,
+    /// Output picture (.png).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// What the colours show.
+    #[arg(long, value_enum, default_value_t = ColourBy::Class)]
+    pub by: ColourBy,
+    /// View direction: azimuth,elevation in degrees.
+    #[arg(long, value_delimiter = ',', num_args = 2)]
+    pub view: Option<Vec<f64>>,
+    /// Picture size: width,height in pixels.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_value = "1024,768")]
+    pub size: Vec<usize>,
+}
+
+/// What the colours of a rendering show.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ColourBy {
+    /// The `class` property (as written by detect or generate).
+    Class,
+    /// The ground truth of a labelled dataset (PCEDNet or Bazazian colours).
+    Truth,
+    /// Run detection with the embedded model first.
+    Detect,
+}
+
+/// Arguments of `demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Directory for demo.ply and demo.png.
+    #[arg(short, long, default_value = ".")]
+    pub output: PathBuf,
+    /// Seed of the generated scene.
+    #[arg(long, default_value_t = 7)]
+    pub seed: u64,
+}
+
+/// Arguments of `bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Dataset root (holding pcednet/ and bazazian/).
+    #[arg(long, default_value = "../shared/datasets")]
+    pub data: PathBuf,
+    /// Output directory for report.md and the plots.
+    #[arg(short, long, default_value = "bench-report")]
+    pub output: PathBuf,
+    /// Fewer iterations and runs: finishes in minutes.
+    #[arg(long)]
+    pub quick: bool,
+}

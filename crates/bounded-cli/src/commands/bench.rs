@@ -1,0 +1,524 @@
+//! `bounded bench`: the paper's evaluation, reproduced side by side with the published peers.
+//!
+//! Features are computed once per cloud at the 16 scales of the scale ablation with every
+//! feature group; every table selects its columns from them (the nested kNN sets make a
+//! smaller configuration's features exactly a subset), so the ablations cost only training.
+
+use super::eval::{self, MethodResults, ModelResult};
+use super::train::{self, FeatureSet, Schedule};
+use super::{rate, sources};
+use crate::cli::BenchArgs;
+use crate::peers;
+use crate::plot::{self, PALETTE, Series};
+use crate::{atomic, pipeline};
+use anyhow::{Context, Result, bail};
+use bounded_data::LabelledCloud;
+use bounded_data::synth::{self, SetConfig, SetKind};
+use bounded_features::{FeatureConfig, FeatureGroups};
+use bounded_geom::Class;
+use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix};
+use std::fmt::Write;
+use std::path::Path;
+use std::time::Instant;
+
+/// The training recipe of the embedded model: generated sets (seeds disjoint from every
+/// evaluation set) plus the Bazazian clouds under the dataset root. README documents the
+/// equivalent `bounded train` command.
+pub const TRAINING_SETS: [&str; 3] = [
+    "generated:cad:1:120",
+    "generated:random:2:80",
+    "generated:boundary:3:60",
+];
+
+/// The generated boundary evaluation set: its own seed, never used for training.
+const BOUNDARY_EVAL: (u64, usize) = (1001, 30);
+
+/// Clouds with their features at the full configuration.
+struct Featured {
+    name: String,
+    truth: Vec<u8>,
+    features: FeatureSet,
+}
+
+/// One evaluation set.
+struct EvalSet {
+    /// Directory or set name, also the peers.csv dataset key.
+    key: &'static str,
+    clouds: Vec<Featured>,
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let start = Instant::now();
+    let schedule = if args.quick {
+        Schedule {
+            iterations: 300,
+            runs: 1,
+            seed: 1,
+        }
+    } else {
+        Schedule {
+            iterations: 3000,
+            runs: 5,
+            seed: 1,
+        }
+    };
+    let ablation_schedule = Schedule {
+        runs: 1,
+        ..schedule
+    };
+    eprintln!(
+        "bench: {} mode, expected duration about {} minutes on 2 cores",
+        if args.quick { "quick" } else { "full" },
+        if args.quick { 4 } else { 35 }
+    );
+    let pcednet = args.data.join("pcednet");
+    let peers_path = pcednet.join("peers.csv");
+    let peers = peers::read(&peers_path)?;
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("cannot create {}", args.output.display()))?;
+
+    // Training data.
+    let shrink = if args.quick { 4 } else { 1 };
+    let mut training = Vec::new();
+    for source in TRAINING_SETS {
+        let mut config = sources::generated_config(source)?;
+        config.shapes /= shrink;
+        training.extend(synth::generate(&config)?);
+    }
+    training.extend(sources::training_clouds(
+        &args.data.join("bazazian").to_string_lossy(),
+    )?);
+
+    let full = FeatureConfig::ablation(16, all_groups())?;
+    let main = FeatureConfig::default();
+    let mut report = String::from("# BoundED-rs bench\n\n");
+    let _ = writeln!(
+        report,
+        "Mode: {}; {} iterations, best of {} runs for the main model (ablations: 1 run). \
+         Training data: {} and the Bazazian clouds ({} clouds, {} points). \
+         Evaluation data is never trained on.\n",
+        if args.quick { "quick" } else { "full" },
+        schedule.iterations,
+        schedule.runs,
+        TRAINING_SETS.join(", "),
+        training.len(),
+        training.iter().map(|c| c.1.cloud.len()).sum::<usize>()
+    );
+
+    // Timing of the default configuration, as the paper's timing table.
+    let t = Instant::now();
+    let main_train = train::feature_set(&training, &main, "features")?;
+    let train_features_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let main_file = train::fit(&main_train, &main, &schedule, "bounded bench".into())?;
+    let train_s = t.elapsed().as_secs_f64();
+    drop(main_train);
+    let classifier = Classifier::from_file(main_file)?;
+
+    let train_full = train::feature_set(&training, &full, "features16")?;
+    drop(training);
+    let sets = [
+        load_eval(&pcednet.join("default"), "default", &full)?,
+        load_eval(&pcednet.join("abc"), "abc", &full)?,
+        load_eval(&pcednet.join("abc_noise_0.04"), "abc_noise_0.04", &full)?,
+        boundary_eval(&full)?,
+    ];
+
+    // 1-2: main tables with peers, and our CA.
+    let ca = CaBaseline::fit(&train_full, &full, &main);
+    for set in &sets[..2] {
+        let ours = score(&classifier, &full, &main, set)?;
+        let mut methods = vec![eval::as_method("BoundED-rs (ours)", &ours, Class::Sharp)];
+        methods.push(ca.evaluate(set));
+        let models: Vec<String> = set.clouds.iter().map(|c| c.name.clone()).collect();
+        methods.extend(eval::peer_methods(&peers, set.key, &models));
+        let _ = writeln!(
+            report,
+            "## {} evaluation set ({} models): medians, sharp edge positive\n\n{}",
+            set.key,
+            set.clouds.len(),
+            eval::medians_table(&methods)
+        );
+        let _ = writeln!(
+            report,
+            "Peers from {}; `sharp+smooth` peers counted smooth edges as positive. {}. \
+             The paper reports BoundED MCC 0.423 (Default, trained on Default) and 0.842 \
+             (ABC, trained on ABC, all 7168 models).\n\n{}\n",
+            peers_path.display(),
+            ca.describe(),
+            eval::per_model_table(&methods[0])
+        );
+        let png = args.output.join(format!("pr_{}.png", set.key));
+        pr_plot(&format!("{}: precision vs recall", set.key), &methods).save_png(&png)?;
+        let _ = writeln!(report, "![{}](pr_{}.png)\n", set.key, set.key);
+    }
+
+    // 3: timing.
+    report.push_str(&timing_table(
+        &classifier,
+        &main,
+        &args.data,
+        train_features_s,
+        train_s,
+    )?);
+
+    // 4: ablations.
+    report.push_str("## Feature ablation (4 scales)\n\n| features | Default MCC | Default F1 | ABC MCC | ABC F1 |\n|---|---|---|---|---|\n");
+    for (label, groups) in feature_ablations() {
+        let target = FeatureConfig {
+            scales: main.scales.clone(),
+            groups,
+        };
+        let ablated;
+        let model = if target == main {
+            &classifier
+        } else {
+            ablated = trained(&train_full, &full, &target, &ablation_schedule)?;
+            &ablated
+        };
+        report.push_str(&ablation_row(label, model, &full, &target, &sets)?);
+    }
+    report.push_str("\n## Scale ablation (all features)\n\n| scales | Default MCC | Default F1 | ABC MCC | ABC F1 |\n|---|---|---|---|---|\n");
+    for count in [2, 4, 8, 16] {
+        let target = FeatureConfig::ablation(count, FeatureGroups::BOUNDED)?;
+        let ablated;
+        let model = if target == main {
+            &classifier
+        } else {
+            ablated = trained(&train_full, &full, &target, &ablation_schedule)?;
+            &ablated
+        };
+        let label = format!("{count}: {:?}", target.scales);
+        report.push_str(&ablation_row(&label, model, &full, &target, &sets)?);
+    }
+
+    // 5: noise and boundaries.
+    let clean = score(&classifier, &full, &main, &sets[1])?;
+    let noisy = score(&classifier, &full, &main, &sets[2])?;
+    let mcc = |r: &[ModelResult]| {
+        eval::as_method("", r, Class::Sharp)
+            .median()
+            .map_or(f64::NAN, |s| s.mcc)
+    };
+    let _ = writeln!(
+        report,
+        "\n## Noise\n\nMedian MCC (sharp): clean ABC {:.3}, noisy ABC (abc_noise_0.04) {:.3}, \
+         difference {:.3}.\n",
+        mcc(&clean),
+        mcc(&noisy),
+        mcc(&clean) - mcc(&noisy)
+    );
+    let boundary = score(&classifier, &full, &main, &sets[3])?;
+    let b = eval::as_method("BoundED-rs (ours)", &boundary, Class::Boundary);
+    let _ = writeln!(
+        report,
+        "## Boundaries (generated set, seed {}, {} clouds, never trained on)\n\n\
+         Boundary positive:\n\n{}\nBoundary F1 over all points: {:.3}. \
+         3-class confusion, all clouds:\n\n{}",
+        BOUNDARY_EVAL.0,
+        BOUNDARY_EVAL.1,
+        eval::medians_table(&[b]),
+        pooled(&boundary).binary(Class::Boundary as u8).f1(),
+        eval::confusion_table(&boundary)
+    );
+    let _ = writeln!(
+        report,
+        "\nBench wall time: {:.1} min.",
+        start.elapsed().as_secs_f64() / 60.0
+    );
+    let path = args.output.join("report.md");
+    atomic::write_text(&path, &report)?;
+    println!("{report}");
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn all_groups() -> FeatureGroups {
+    FeatureGroups {
+        sigma: true,
+        ..FeatureGroups::BOUNDED
+    }
+}
+
+/// The paper's feature ablation, as (label, groups).
+fn feature_ablations() -> Vec<(&'static str, FeatureGroups)> {
+    let none = FeatureGroups {
+        sigma: false,
+        sigma_u: false,
+        sigma_l: false,
+        d: false,
+        s: false,
+        c: false,
+    };
+    let ul = FeatureGroups {
+        sigma_u: true,
+        sigma_l: true,
+        ..none
+    };
+    vec![
+        ("sigma", FeatureGroups { sigma: true, ..none }),
+        ("sigma_U, sigma_L", ul),
+        ("sigma_U/L, d", FeatureGroups { d: true, ..ul }),
+        ("sigma_U/L, d, s", FeatureGroups { d: true, s: true, ..ul }),
+        ("sigma_U/L, d, s, c (BoundED)", FeatureGroups::BOUNDED),
+    ]
+}
+
+/// Column indices of `target`'s values within rows computed with `full`.
+fn columns(full: &FeatureConfig, target: &FeatureConfig) -> Result<Vec<usize>> {
+    let full_names = full.groups.names();
+    let per_scale = full_names.len();
+    let mut columns = Vec::new();
+    for scale in &target.scales {
+        let s = full
+            .scales
+            .iter()
+            .position(|k| k == scale)
+            .with_context(|| format!("scale {scale} is not among {:?}", full.scales))?;
+        for name in target.groups.names() {
+            let v = full_names
+                .iter()
+                .position(|n| *n == name)
+                .with_context(|| format!("feature {name} not computed"))?;
+            columns.push(s * per_scale + v);
+        }
+    }
+    Ok(columns)
+}
+
+/// The rows of `set` restricted to `columns`.
+fn select(set: &FeatureSet, columns: &[usize]) -> FeatureSet {
+    let mut features = Vec::with_capacity(set.len() * columns.len());
+    for row in set.features.chunks_exact(set.per_point) {
+        features.extend(columns.iter().map(|&c| row[c]));
+    }
+    FeatureSet {
+        features,
+        labels: set.labels.clone(),
+        per_point: columns.len(),
+    }
+}
+
+fn trained(
+    set: &FeatureSet,
+    full: &FeatureConfig,
+    target: &FeatureConfig,
+    schedule: &Schedule,
+) -> Result<Classifier> {
+    let selected = select(set, &columns(full, target)?);
+    let file = train::fit(&selected, target, schedule, "bounded bench (ablation)".into())?;
+    Ok(Classifier::from_file(file)?)
+}
+
+fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Result<Vec<Featured>> {
+    clouds
+        .into_iter()
+        .map(|(name, labelled)| {
+            let truth = labelled.labels.iter().map(|&c| c as u8).collect();
+            let features = train::feature_set(&[(name.clone(), labelled)], full, "features16")?;
+            Ok(Featured {
+                name,
+                truth,
+                features,
+            })
+        })
+        .collect()
+}
+
+fn load_eval(dir: &Path, key: &'static str, full: &FeatureConfig) -> Result<EvalSet> {
+    if !dir.is_dir() {
+        bail!("{}: evaluation set missing (see --data)", dir.display());
+    }
+    let clouds = featured(eval::load_set(dir, Class::NonEdge)?, full)?;
+    Ok(EvalSet { key, clouds })
+}
+
+fn boundary_eval(full: &FeatureConfig) -> Result<EvalSet> {
+    let config = SetConfig::new(SetKind::Boundary, BOUNDARY_EVAL.0, BOUNDARY_EVAL.1);
+    Ok(EvalSet {
+        key: "boundary",
+        clouds: featured(synth::generate(&config)?, full)?,
+    })
+}
+
+/// Classifies every cloud of `set` with `model` (features `target`, selected from `full`).
+fn score(
+    model: &Classifier,
+    full: &FeatureConfig,
+    target: &FeatureConfig,
+    set: &EvalSet,
+) -> Result<Vec<ModelResult>> {
+    let columns = columns(full, target)?;
+    set.clouds
+        .iter()
+        .map(|c| {
+            let predicted = model.classify(&select(&c.features, &columns).features)?;
+            Ok(ModelResult {
+                name: c.name.clone(),
+                matrix: ConfusionMatrix::from_labels(&c.truth, &predicted)?,
+            })
+        })
+        .collect()
+}
+
+fn pooled(results: &[ModelResult]) -> ConfusionMatrix {
+    let mut total = ConfusionMatrix::default();
+    for r in results {
+        total.add(&r.matrix);
+    }
+    total
+}
+
+fn ablation_row(
+    label: &str,
+    model: &Classifier,
+    full: &FeatureConfig,
+    target: &FeatureConfig,
+    sets: &[EvalSet],
+) -> Result<String> {
+    let mut row = format!("| {label} |");
+    for set in &sets[..2] {
+        let m = eval::as_method("", &score(model, full, target, set)?, Class::Sharp);
+        let s = m.median().context("empty evaluation set")?;
+        let _ = write!(row, " {:.3} | {:.3} |", s.mcc, s.f1);
+    }
+    row.push('\n');
+    Ok(row)
+}
+
+/// Timing of the default configuration: training preprocessing and training, then features
+/// and classification on each PCEDNet evaluation set (through the streaming detector).
+fn timing_table(
+    classifier: &Classifier,
+    main: &FeatureConfig,
+    data: &Path,
+    train_features_s: f64,
+    train_s: f64,
+) -> Result<String> {
+    let mut out = format!(
+        "## Timing (2 cores, CPU only)\n\nTraining: features {train_features_s:.1} s, \
+         training {train_s:.1} s.\n\n| set | points | features + kNN s | classification s | points/s |\n\
+         |---|---|---|---|---|\n"
+    );
+    for key in ["default", "abc"] {
+        let clouds = eval::load_set(&data.join("pcednet").join(key), Class::NonEdge)?;
+        let (mut points, mut total, mut classification) = (0, 0.0, 0.0);
+        for (name, labelled) in &clouds {
+            let d = pipeline::detect(&labelled.cloud, classifier, main, false)
+                .with_context(|| name.clone())?;
+            points += labelled.cloud.len();
+            total += d.elapsed.as_secs_f64();
+            classification += d.classification.as_secs_f64();
+        }
+        let _ = writeln!(
+            out,
+            "| {key} | {points} | {:.2} | {classification:.3} | {} |",
+            total - classification,
+            rate(points, total)
+        );
+    }
+    out.push('\n');
+    Ok(out)
+}
+
+/// A precision-recall scatter plot of the methods.
+fn pr_plot(title: &str, methods: &[MethodResults]) -> crate::canvas::Canvas {
+    let series: Vec<Series> = methods
+        .iter()
+        .enumerate()
+        .map(|(i, m)| Series {
+            name: m.name.clone(),
+            colour: PALETTE[i % PALETTE.len()],
+            points: m
+                .models
+                .iter()
+                .map(|(_, c)| (c.recall(), c.precision()))
+                .collect(),
+        })
+        .collect();
+    plot::precision_recall(title, &series)
+}
+
+/// Our covariance-analysis baseline: a point is a sharp edge when its surface variation
+/// `lambda_min / (lambda_1 + lambda_2 + lambda_3)` at one scale exceeds a threshold; scale and
+/// threshold are the ones with the best MCC on the training set.
+struct CaBaseline {
+    column: [usize; 3],
+    scale: usize,
+    threshold: f32,
+}
+
+impl CaBaseline {
+    fn fit(train: &FeatureSet, full: &FeatureConfig, main: &FeatureConfig) -> Self {
+        let mut best = (f64::MIN, Self {
+            column: [0, 1, 2],
+            scale: full.scales[0],
+            threshold: 0.0,
+        });
+        let sigma_of = |scale: usize| {
+            let s = full.scales.iter().position(|&k| k == scale).unwrap_or(0);
+            let base = s * full.groups.count();
+            [base, base + 1, base + 2]
+        };
+        let truth: Vec<u8> = train.labels.iter().map(|&l| u8::from(l == 1)).collect();
+        for &scale in &main.scales {
+            let column = sigma_of(scale);
+            for step in 1..100 {
+                let candidate = Self {
+                    column,
+                    scale,
+                    threshold: step as f32 / 300.0,
+                };
+                let predicted = candidate.predict(train);
+                let mcc = BinaryConfusion::from_labels(&truth, &predicted, 1)
+                    .map_or(f64::MIN, |c| c.mcc());
+                if mcc > best.0 {
+                    best = (mcc, candidate);
+                }
+            }
+        }
+        best.1
+    }
+
+    fn variation(&self, row: &[f32]) -> f32 {
+        let l = self.column.map(|c| row[c]);
+        let sum = l[0] + l[1] + l[2];
+        if sum > 0.0 {
+            l[0].min(l[1]).min(l[2]) / sum
+        } else {
+            0.0
+        }
+    }
+
+    fn predict(&self, set: &FeatureSet) -> Vec<u8> {
+        set.features
+            .chunks_exact(set.per_point)
+            .map(|row| u8::from(self.variation(row) > self.threshold))
+            .collect()
+    }
+
+    fn evaluate(&self, set: &EvalSet) -> MethodResults {
+        MethodResults {
+            name: "CA-rs (surface variation, ours)".into(),
+            positive: "sharp".into(),
+            models: set
+                .clouds
+                .iter()
+                .map(|c| {
+                    let truth: Vec<u8> = c.truth.iter().map(|&l| u8::from(l == 1)).collect();
+                    let predicted = self.predict(&c.features);
+                    let confusion =
+                        BinaryConfusion::from_labels(&truth, &predicted, 1).unwrap_or_default();
+                    (c.name.clone(), confusion)
+                })
+                .collect(),
+        }
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "CA-rs: surface variation at k = {} above {:.3} (fitted on the training set)",
+            self.scale, self.threshold
+        )
+    }
+}

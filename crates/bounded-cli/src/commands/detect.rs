@@ -1,0 +1,45 @@
+//! `bounded detect`: label every point of a cloud file.
+
+use super::{rate, sources};
+use crate::cli::DetectArgs;
+use crate::{pipeline, progress};
+use anyhow::{Context, Result};
+use bounded_data::format::{self, Format};
+use std::time::Instant;
+
+pub fn run(args: &DetectArgs) -> Result<()> {
+    let start = Instant::now();
+    // Fail on an unknown output format before any work is done.
+    Format::from_path(&args.output)?;
+    let classifier = sources::model(args.model.as_deref())?;
+    let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
+
+    let reading = progress::spinner("read");
+    let table = format::read(&args.input);
+    reading.finish_and_clear();
+    let table = table?;
+    let n = table.len();
+    let detection = pipeline::detect(&table.cloud, &classifier, &config, true)
+        .with_context(|| args.input.display().to_string())?;
+
+    let writing = progress::spinner("write");
+    let written = format::write_annotated(
+        &args.output,
+        &table,
+        &detection.classes,
+        &detection.probabilities,
+    );
+    writing.finish_and_clear();
+    written?;
+
+    let [non_edge, sharp, boundary] = detection.class_counts();
+    let seconds = start.elapsed().as_secs_f64();
+    eprintln!(
+        "{n} points: {sharp} sharp edge, {boundary} boundary, {non_edge} non-edge; \
+         detection {:.2} s ({}), total {seconds:.2} s; wrote {}",
+        detection.elapsed.as_secs_f64(),
+        rate(n, detection.elapsed.as_secs_f64()),
+        args.output.display()
+    );
+    Ok(())
+}

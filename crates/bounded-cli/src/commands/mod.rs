@@ -1,0 +1,36 @@
+//! One module per subcommand; each parses nothing and only wires the library crates together.
+
+mod bench;
+mod demo;
+mod detect;
+mod eval;
+mod generate;
+mod render;
+mod sources;
+mod train;
+
+use crate::cli::Command;
+use anyhow::Result;
+
+/// Runs one subcommand.
+pub fn run(command: Command) -> Result<()> {
+    match command {
+        Command::Detect(args) => detect::run(&args),
+        Command::Train(args) => train::run(&args),
+        Command::Eval(args) => eval::run(&args),
+        Command::Generate(args) => generate::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::Demo(args) => demo::run(&args),
+        Command::Bench(args) => bench::run(&args),
+    }
+}
+
+/// Points per second, for summaries.
+fn rate(points: usize, seconds: f64) -> String {
+    let per_second = points as f64 / seconds.max(1e-9);
+    if per_second >= 1e6 {
+        format!("{:.2} M points/s", per_second / 1e6)
+    } else {
+        format!("{:.0} k points/s", per_second / 1e3)
+    }
+}

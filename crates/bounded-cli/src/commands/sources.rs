@@ -1,0 +1,96 @@
+//! Where clouds, labels and models come from: files, dataset directories, generated sets and
+//! the embedded default model.
+
+use anyhow::{Context, Result, bail};
+use bounded_data::dataset::{Manifest, Role, cloud_files};
+use bounded_data::labels::{self, Convention};
+use bounded_data::synth::{self, SetConfig, SetKind};
+use bounded_data::{LabelledCloud, format};
+use bounded_geom::Class;
+use bounded_nn::Classifier;
+use std::path::{Path, PathBuf};
+
+/// The classifier in `path`, or the embedded default model.
+pub fn model(path: Option<&Path>) -> Result<Classifier> {
+    match path {
+        Some(p) => Classifier::load(p).with_context(|| format!("cannot load model {}", p.display())),
+        None => bounded_nn::default_model().context("cannot load the embedded model"),
+    }
+}
+
+/// The clouds of dataset `dir` that have `role`; a directory without roles (no
+/// `manifest.txt`, no `train/`, `validation/`, `evaluation/`) holds only clouds of that role.
+pub fn dataset_files(dir: &Path, roles: &[Role]) -> Result<Vec<PathBuf>> {
+    if !dir.is_dir() {
+        bail!("{}: not a directory", dir.display());
+    }
+    let manifest = Manifest::open(dir)?;
+    let files = if manifest.entries.is_empty() {
+        cloud_files(dir)?
+    } else {
+        roles
+            .iter()
+            .flat_map(|&r| manifest.with_role(r).map(Path::to_path_buf))
+            .collect()
+    };
+    if files.is_empty() {
+        bail!("{}: no point-cloud files found", dir.display());
+    }
+    Ok(files)
+}
+
+/// Reads a labelled cloud, detecting its label convention: a `class` or `label` property
+/// if present; otherwise the PCEDNet colours (smooth edges as `smooth_edge`), and the
+/// Bazazian colours when a colour outside PCEDNet's palette appears.
+pub fn labelled(path: &Path, smooth_edge: Class) -> Result<LabelledCloud> {
+    let table = format::read(path)?;
+    if table.property("class").is_some() || table.property("label").is_some() {
+        return Ok(labels::from_table(table, Convention::ClassProperty, path)?);
+    }
+    let pcednet = Convention::Pcednet { smooth_edge };
+    match labels::from_table(table.clone(), pcednet, path) {
+        Ok(labelled) => Ok(labelled),
+        Err(pcednet_error) => labels::from_table(table, Convention::Bazazian, path)
+            .map_err(|_| pcednet_error.into()),
+    }
+}
+
+/// The stem of `path`, naming a cloud in tables.
+pub fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+/// Parses a set kind name.
+pub fn set_kind(name: &str) -> Result<SetKind> {
+    [SetKind::Cad, SetKind::Random, SetKind::Boundary, SetKind::Mixed]
+        .into_iter()
+        .find(|k| k.name() == name)
+        .with_context(|| format!("unknown set kind {name:?} (cad, random, boundary or mixed)"))
+}
+
+/// The set described by `generated:KIND:SEED[:SHAPES]` (default 60 shapes).
+pub fn generated_config(spec: &str) -> Result<SetConfig> {
+    let fields: Vec<&str> = spec.split(':').collect();
+    let (kind, seed, shapes) = match fields.as_slice() {
+        ["generated", kind, seed] => (kind, seed, "60"),
+        ["generated", kind, seed, shapes] => (kind, seed, *shapes),
+        _ => bail!("{spec:?}: expected generated:KIND:SEED[:SHAPES]"),
+    };
+    let seed = seed.parse().with_context(|| format!("{spec:?}: bad seed"))?;
+    let shapes = shapes.parse().with_context(|| format!("{spec:?}: bad shape count"))?;
+    Ok(SetConfig::new(set_kind(kind)?, seed, shapes))
+}
+
+/// The named clouds of one training source: a dataset directory (train and validation
+/// roles) or a generated set.
+pub fn training_clouds(source: &str) -> Result<Vec<(String, LabelledCloud)>> {
+    if source.starts_with("generated:") {
+        return Ok(synth::generate(&generated_config(source)?)?);
+    }
+    dataset_files(Path::new(source), &[Role::Train, Role::Validation])?
+        .into_iter()
+        .map(|path| Ok((stem(&path), labelled(&path, Class::NonEdge)?)))
+        .collect()
+}

@@ -1,0 +1,163 @@
+//! `bounded train`: features of labelled clouds, computed once, then the classifier.
+
+use super::sources;
+use crate::cli::{FeatureGroupArg, TrainArgs};
+use crate::{atomic, progress};
+use anyhow::{Context, Result, bail};
+use bounded_data::LabelledCloud;
+use bounded_features::{FeatureConfig, FeatureGroups, extract};
+use bounded_nn::{Dataset, ModelConfig, ModelFile, TrainConfig, train};
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+/// Features and labels of many clouds, concatenated (row-major, `per_point` values a row).
+pub struct FeatureSet {
+    /// Feature rows.
+    pub features: Vec<f32>,
+    /// Class code per row.
+    pub labels: Vec<u8>,
+    /// Values per row.
+    pub per_point: usize,
+}
+
+impl FeatureSet {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.labels.len()
+    }
+}
+
+/// How long and how often to train.
+pub struct Schedule {
+    /// Iterations per run.
+    pub iterations: usize,
+    /// Runs; the lowest validation loss wins.
+    pub runs: usize,
+    /// Seed of the first run.
+    pub seed: u64,
+}
+
+/// Computes the features of every cloud with `config`.
+pub fn feature_set(
+    clouds: &[(String, LabelledCloud)],
+    config: &FeatureConfig,
+    step: &str,
+) -> Result<FeatureSet> {
+    let total = clouds.iter().map(|(_, c)| c.cloud.len()).sum::<usize>();
+    let bar = progress::bar(step, total as u64, "points");
+    let mut set = FeatureSet {
+        features: Vec::with_capacity(total * config.features_per_point()),
+        labels: Vec::with_capacity(total),
+        per_point: config.features_per_point(),
+    };
+    for (name, labelled) in clouds {
+        let features = extract(&labelled.cloud, config).with_context(|| name.clone())?;
+        set.features.extend_from_slice(features.as_slice());
+        set.labels.extend(labelled.labels.iter().map(|&c| c as u8));
+        bar.inc(labelled.cloud.len() as u64);
+    }
+    bar.finish_and_clear();
+    Ok(set)
+}
+
+/// Trains a classifier on `set` (computed with `config`) and packs it with its provenance.
+pub fn fit(
+    set: &FeatureSet,
+    config: &FeatureConfig,
+    schedule: &Schedule,
+    command: String,
+) -> Result<ModelFile> {
+    let data = Dataset::new(&set.features, &set.labels, set.per_point)?;
+    let model = ModelConfig::new(config.scales.len(), config.features_per_scale());
+    let train_config = TrainConfig::new(model)
+        .with_iterations(schedule.iterations)
+        .with_runs(schedule.runs)
+        .with_seed(schedule.seed);
+    let bar = progress::bar("train", (schedule.iterations * schedule.runs) as u64, "its");
+    let trained = train(&data, &train_config, |p| {
+        bar.inc(1);
+        if let Some(best) = p.best_val_loss {
+            bar.set_message(format!(
+                "run {}/{} loss {:.4} best val {best:.4}",
+                p.run + 1,
+                p.runs,
+                p.loss
+            ));
+        }
+    })?;
+    bar.finish_and_clear();
+    let names = config.groups.names().iter().map(|s| s.to_string()).collect();
+    Ok(ModelFile::from_trained(
+        &trained,
+        config.scales.clone(),
+        names,
+        command,
+    )?)
+}
+
+/// Writes a model file atomically.
+pub fn save(file: &ModelFile, path: &Path) -> Result<()> {
+    let bytes = file.to_bytes()?;
+    atomic::write_with(path, |out| Ok(out.write_all(&bytes)?))
+}
+
+/// The feature groups selected on the command line.
+pub fn groups(selected: &[FeatureGroupArg]) -> Result<FeatureGroups> {
+    let has = |g| selected.contains(&g);
+    let groups = FeatureGroups {
+        sigma: false,
+        sigma_u: has(FeatureGroupArg::SigmaU),
+        sigma_l: has(FeatureGroupArg::SigmaL),
+        d: has(FeatureGroupArg::D),
+        s: has(FeatureGroupArg::S),
+        c: has(FeatureGroupArg::C),
+    };
+    if groups.count() == 0 {
+        bail!("--features selects no feature group");
+    }
+    Ok(groups)
+}
+
+pub fn run(args: &TrainArgs) -> Result<()> {
+    let start = Instant::now();
+    let config = FeatureConfig {
+        scales: args.scales.clone(),
+        groups: groups(&args.features)?,
+    };
+    config.validate()?;
+    let mut clouds = Vec::new();
+    for source in &args.data {
+        let loading = progress::spinner("load");
+        loading.set_message(source.clone());
+        let loaded = sources::training_clouds(source);
+        loading.finish_and_clear();
+        clouds.extend(loaded?);
+    }
+    let set = feature_set(&clouds, &config, "features")?;
+    let features_seconds = start.elapsed().as_secs_f64();
+    let schedule = Schedule {
+        iterations: args.iterations,
+        runs: args.runs,
+        seed: args.seed,
+    };
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let file = fit(&set, &config, &schedule, command)?;
+    save(&file, &args.output)?;
+    let mut counts = [0usize; 3];
+    for &l in &set.labels {
+        counts[l as usize] += 1;
+    }
+    eprintln!(
+        "{} clouds, {} points ({} sharp, {} boundary): features {features_seconds:.1} s, \
+         total {:.1} s, best validation loss {:.4}; wrote {}",
+        clouds.len(),
+        set.len(),
+        counts[1],
+        counts[2],
+        start.elapsed().as_secs_f64(),
+        file.provenance.val_loss,
+        args.output.display()
+    );
+    Ok(())
+}
