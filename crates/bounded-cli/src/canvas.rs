@@ -187,7 +187,11 @@ mod tests {
         assert_eq!(c.get(15, 9), [0; 3]);
         c.disc(10, 10, 3, [1, 2, 3]);
         assert_eq!(c.get(13, 10), [1, 2, 3]);
-        assert_eq!(c.get(13, 13), [255; 3], "corner of the box is outside the disc");
+        assert_eq!(
+            c.get(13, 13),
+            [255; 3],
+            "corner of the box is outside the disc"
+        );
     }
 
     #[test]

@@ -38,7 +38,9 @@ fn parse(text: &str) -> Result<Vec<PeerResult>> {
     match lines.next() {
         Some((_, header))
             if header.trim() == "dataset,model,method,description,gt_positive,tp,fp,tn,fn" => {}
-        _ => bail!("line 1: expected the header dataset,model,method,description,gt_positive,tp,fp,tn,fn"),
+        _ => bail!(
+            "line 1: expected the header dataset,model,method,description,gt_positive,tp,fp,tn,fn"
+        ),
     }
     let mut rows = Vec::new();
     for (n, line) in lines {
@@ -50,9 +52,14 @@ fn parse(text: &str) -> Result<Vec<PeerResult>> {
             bail!("line {}: expected 9 columns, found {}", n + 1, cols.len());
         }
         let count = |i: usize| -> Result<u64> {
-            cols[i]
-                .parse()
-                .with_context(|| format!("line {}: column {} is not a count: {:?}", n + 1, i + 1, cols[i]))
+            cols[i].parse().with_context(|| {
+                format!(
+                    "line {}: column {} is not a count: {:?}",
+                    n + 1,
+                    i + 1,
+                    cols[i]
+                )
+            })
         };
         rows.push(PeerResult {
             dataset: cols[0].into(),
@@ -79,7 +86,10 @@ mod tests {
                   abc,0133,ca,CA covariance analysis,sharp,1,2,3,4\n";
         let rows = parse(ok).unwrap();
         assert_eq!(rows.len(), 1);
-        assert_eq!((rows[0].tp, rows[0].fp, rows[0].tn, rows[0].fn_), (1, 2, 3, 4));
+        assert_eq!(
+            (rows[0].tp, rows[0].fp, rows[0].tn, rows[0].fn_),
+            (1, 2, 3, 4)
+        );
         assert_eq!(rows[0].model, "0133");
         let bad = ok.replace(",4\n", ",x\n");
         let err = format!("{:#}", parse(&bad).unwrap_err());

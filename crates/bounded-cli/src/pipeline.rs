@@ -72,7 +72,12 @@ fn groups_named(names: &[String]) -> Option<FeatureGroups> {
             s: bits & 16 != 0,
             c: bits & 32 != 0,
         })
-        .find(|g| g.names().iter().copied().eq(names.iter().map(String::as_str)))
+        .find(|g| {
+            g.names()
+                .iter()
+                .copied()
+                .eq(names.iter().map(String::as_str))
+        })
 }
 
 /// Classifies every point of `cloud`; `show_progress` draws a bar on stderr.

@@ -50,8 +50,20 @@ pub fn precision_recall(title: &str, series: &[Series]) -> Canvas {
         c.line((LEFT, y), (LEFT + SIDE, y), grey);
         if tick % 2 == 0 {
             let label = format!("{v:.1}");
-            c.text(x - Canvas::text_width(&label, 1) / 2, TOP + SIDE + 6, &label, 1, black);
-            c.text(LEFT - 8 - Canvas::text_width(&label, 1), y - 3, &label, 1, black);
+            c.text(
+                x - Canvas::text_width(&label, 1) / 2,
+                TOP + SIDE + 6,
+                &label,
+                1,
+                black,
+            );
+            c.text(
+                LEFT - 8 - Canvas::text_width(&label, 1),
+                y - 3,
+                &label,
+                1,
+                black,
+            );
         }
     }
     c.line((LEFT, TOP + SIDE), (LEFT + SIDE, TOP + SIDE), black);

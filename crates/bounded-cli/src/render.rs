@@ -26,7 +26,13 @@ impl Default for View {
 }
 
 /// Renders `points` with per-point `colours` into a `width` x `height` picture.
-pub fn render(points: &[[f32; 3]], colours: &[Rgb], view: View, width: usize, height: usize) -> Canvas {
+pub fn render(
+    points: &[[f32; 3]],
+    colours: &[Rgb],
+    view: View,
+    width: usize,
+    height: usize,
+) -> Canvas {
     let mut canvas = Canvas::new(width, height, [255, 255, 255]);
     if points.is_empty() {
         return canvas;
@@ -94,8 +100,14 @@ pub fn render(points: &[[f32; 3]], colours: &[Rgb], view: View, width: usize, he
                 }
                 _ => 0.0,
             };
-            let gx = gradient(x.checked_sub(1).map(|x| y * width + x), (x + 1 < width).then(|| i + 1));
-            let gy = gradient((y + 1 < height).then(|| i + width), y.checked_sub(1).map(|y| y * width + x));
+            let gx = gradient(
+                x.checked_sub(1).map(|x| y * width + x),
+                (x + 1 < width).then(|| i + 1),
+            );
+            let gy = gradient(
+                (y + 1 < height).then(|| i + width),
+                y.checked_sub(1).map(|y| y * width + x),
+            );
             let normal = normalise([-gx, -gy, 1.0]);
             let shade = 0.35 + 0.65 * dot(normal, light).max(0.0);
             let [r, g, b] = colour[i];
@@ -154,7 +166,12 @@ mod tests {
     /// The nearer of two overlapping points wins the depth test.
     #[test]
     fn nearer_point_is_drawn() {
-        let points = [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, -1.0, 0.0]];
+        let points = [
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, -1.0, 0.0],
+        ];
         let colours = [[0, 0, 250], [250, 0, 0], [0; 3], [0; 3]];
         let view = View {
             azimuth: 0.0,

@@ -256,10 +256,23 @@ fn feature_ablations() -> Vec<(&'static str, FeatureGroups)> {
         ..none
     };
     vec![
-        ("sigma", FeatureGroups { sigma: true, ..none }),
+        (
+            "sigma",
+            FeatureGroups {
+                sigma: true,
+                ..none
+            },
+        ),
         ("sigma_U, sigma_L", ul),
         ("sigma_U/L, d", FeatureGroups { d: true, ..ul }),
-        ("sigma_U/L, d, s", FeatureGroups { d: true, s: true, ..ul }),
+        (
+            "sigma_U/L, d, s",
+            FeatureGroups {
+                d: true,
+                s: true,
+                ..ul
+            },
+        ),
         ("sigma_U/L, d, s, c (BoundED)", FeatureGroups::BOUNDED),
     ]
 }
@@ -306,7 +319,12 @@ fn trained(
     schedule: &Schedule,
 ) -> Result<Classifier> {
     let selected = select(set, &columns(full, target)?);
-    let file = train::fit(&selected, target, schedule, "bounded bench (ablation)".into())?;
+    let file = train::fit(
+        &selected,
+        target,
+        schedule,
+        "bounded bench (ablation)".into(),
+    )?;
     Ok(Classifier::from_file(file)?)
 }
 
@@ -450,11 +468,14 @@ struct CaBaseline {
 
 impl CaBaseline {
     fn fit(train: &FeatureSet, full: &FeatureConfig, main: &FeatureConfig) -> Self {
-        let mut best = (f64::MIN, Self {
-            column: [0, 1, 2],
-            scale: full.scales[0],
-            threshold: 0.0,
-        });
+        let mut best = (
+            f64::MIN,
+            Self {
+                column: [0, 1, 2],
+                scale: full.scales[0],
+                threshold: 0.0,
+            },
+        );
         let sigma_of = |scale: usize| {
             let s = full.scales.iter().position(|&k| k == scale).unwrap_or(0);
             let base = s * full.groups.count();

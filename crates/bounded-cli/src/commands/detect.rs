@@ -3,7 +3,7 @@
 use super::{rate, sources};
 use crate::cli::DetectArgs;
 use crate::{pipeline, progress};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use bounded_data::format::{self, Format};
 use std::time::Instant;
 
@@ -11,6 +11,13 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on an unknown output format before any work is done.
     Format::from_path(&args.output)?;
+    let parent = match args.output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => std::path::Path::new("."),
+    };
+    if !parent.is_dir() {
+        bail!("{}: output directory does not exist", parent.display());
+    }
     let classifier = sources::model(args.model.as_deref())?;
     let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
 

@@ -174,7 +174,14 @@ pub fn confusion_table(results: &[ModelResult]) -> String {
         String::from("| truth \\ predicted | non-edge | sharp | boundary |\n|---|---|---|---|\n");
     for class in Class::ALL {
         let row = total.counts[class as usize];
-        let _ = writeln!(out, "| {} | {} | {} | {} |", class.name(), row[0], row[1], row[2]);
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} |",
+            class.name(),
+            row[0],
+            row[1],
+            row[2]
+        );
     }
     out
 }
@@ -206,7 +213,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         let models: Vec<String> = ours.models.iter().map(|m| m.0.clone()).collect();
         let peers = peer_methods(&peers::read(path)?, &dataset, &models);
         if peers.is_empty() {
-            eprintln!("note: {} has no published results for dataset {dataset:?}", path.display());
+            eprintln!(
+                "note: {} has no published results for dataset {dataset:?}",
+                path.display()
+            );
         }
         let mut methods = vec![ours];
         methods.extend(peers);

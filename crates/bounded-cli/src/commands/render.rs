@@ -24,10 +24,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bail!("--size {width},{height}: each side must be 16..16384 pixels");
     }
     let view = match args.view.as_deref() {
-        Some(&[azimuth, elevation]) => View {
-            azimuth,
-            elevation,
-        },
+        Some(&[azimuth, elevation]) => View { azimuth, elevation },
         _ => View::default(),
     };
     let table = format::read(&args.input)?;

@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 /// The classifier in `path`, or the embedded default model.
 pub fn model(path: Option<&Path>) -> Result<Classifier> {
     match path {
-        Some(p) => Classifier::load(p).with_context(|| format!("cannot load model {}", p.display())),
+        Some(p) => {
+            Classifier::load(p).with_context(|| format!("cannot load model {}", p.display()))
+        }
         None => bounded_nn::default_model().context("cannot load the embedded model"),
     }
 }
@@ -50,8 +52,9 @@ pub fn labelled(path: &Path, smooth_edge: Class) -> Result<LabelledCloud> {
     let pcednet = Convention::Pcednet { smooth_edge };
     match labels::from_table(table.clone(), pcednet, path) {
         Ok(labelled) => Ok(labelled),
-        Err(pcednet_error) => labels::from_table(table, Convention::Bazazian, path)
-            .map_err(|_| pcednet_error.into()),
+        Err(pcednet_error) => {
+            labels::from_table(table, Convention::Bazazian, path).map_err(|_| pcednet_error.into())
+        }
     }
 }
 
@@ -64,10 +67,15 @@ pub fn stem(path: &Path) -> String {
 
 /// Parses a set kind name.
 pub fn set_kind(name: &str) -> Result<SetKind> {
-    [SetKind::Cad, SetKind::Random, SetKind::Boundary, SetKind::Mixed]
-        .into_iter()
-        .find(|k| k.name() == name)
-        .with_context(|| format!("unknown set kind {name:?} (cad, random, boundary or mixed)"))
+    [
+        SetKind::Cad,
+        SetKind::Random,
+        SetKind::Boundary,
+        SetKind::Mixed,
+    ]
+    .into_iter()
+    .find(|k| k.name() == name)
+    .with_context(|| format!("unknown set kind {name:?} (cad, random, boundary or mixed)"))
 }
 
 /// The set described by `generated:KIND:SEED[:SHAPES]` (default 60 shapes).
@@ -78,8 +86,12 @@ pub fn generated_config(spec: &str) -> Result<SetConfig> {
         ["generated", kind, seed, shapes] => (kind, seed, *shapes),
         _ => bail!("{spec:?}: expected generated:KIND:SEED[:SHAPES]"),
     };
-    let seed = seed.parse().with_context(|| format!("{spec:?}: bad seed"))?;
-    let shapes = shapes.parse().with_context(|| format!("{spec:?}: bad shape count"))?;
+    let seed = seed
+        .parse()
+        .with_context(|| format!("{spec:?}: bad seed"))?;
+    let shapes = shapes
+        .parse()
+        .with_context(|| format!("{spec:?}: bad shape count"))?;
     Ok(SetConfig::new(set_kind(kind)?, seed, shapes))
 }
 

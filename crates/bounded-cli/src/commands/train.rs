@@ -87,7 +87,12 @@ pub fn fit(
         }
     })?;
     bar.finish_and_clear();
-    let names = config.groups.names().iter().map(|s| s.to_string()).collect();
+    let names = config
+        .groups
+        .names()
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     Ok(ModelFile::from_trained(
         &trained,
         config.scales.clone(),

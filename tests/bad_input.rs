@@ -1,0 +1,133 @@
+//! Bad input through the binary: non-zero exit, one line naming the problem, no panic, no
+//! output file.
+
+mod common;
+
+use common::{bounded_paths, has_files};
+use std::path::Path;
+
+/// Runs detect on `input` into a fresh directory and checks the failure contract; returns
+/// the error line.
+fn fails(input: &Path, output_name: &str) -> String {
+    let out_dir = tempfile::tempdir().unwrap();
+    let output = out_dir.path().join(output_name);
+    let run = bounded_paths(&[&"detect", &input, &"-o", &output]);
+    let err = String::from_utf8_lossy(&run.stderr).into_owned();
+    assert!(!run.status.success(), "{}: accepted", input.display());
+    assert!(
+        !err.contains("panicked"),
+        "{}: panic: {err}",
+        input.display()
+    );
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{}: not one line: {err}", input.display());
+    assert!(lines[0].starts_with("error: "), "{err}");
+    assert!(
+        !has_files(out_dir.path()),
+        "{}: output left behind",
+        input.display()
+    );
+    lines[0].to_string()
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+fn ascii_ply(points: &[[f32; 3]]) -> String {
+    let mut s = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+        points.len()
+    );
+    for p in points {
+        s += &format!("{} {} {}\n", p[0], p[1], p[2]);
+    }
+    s
+}
+
+fn grid(n: usize) -> Vec<[f32; 3]> {
+    (0..n)
+        .map(|i| [(i % 40) as f32, (i / 40) as f32, 0.0])
+        .collect()
+}
+
+#[test]
+fn empty_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let line = fails(&write(dir.path(), "empty.ply", b""), "out.ply");
+    assert!(line.contains("empty.ply"), "{line}");
+}
+
+#[test]
+fn header_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = ascii_ply(&grid(500));
+    let header = &text[..text.find("end_header\n").unwrap() + 11];
+    let line = fails(
+        &write(dir.path(), "header.ply", header.as_bytes()),
+        "out.ply",
+    );
+    assert!(line.contains("header.ply"), "{line}");
+}
+
+#[test]
+fn truncated_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\nproperty float y\nproperty float z\nend_header\n".to_vec();
+    for p in grid(600) {
+        for v in p {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    let line = fails(&write(dir.path(), "cut.ply", &bytes), "out.ply");
+    assert!(line.contains("cut.ply"), "{line}");
+}
+
+#[test]
+fn nan_coordinate() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text: String = grid(500)
+        .iter()
+        .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
+        .collect();
+    text += "1 nan 2\n";
+    let line = fails(&write(dir.path(), "nan.xyz", text.as_bytes()), "out.xyz");
+    assert!(
+        line.contains("nan.xyz") && line.to_lowercase().contains("finite"),
+        "{line}"
+    );
+}
+
+#[test]
+fn fewer_points_than_the_largest_scale() {
+    let dir = tempfile::tempdir().unwrap();
+    let line = fails(
+        &write(dir.path(), "small.ply", ascii_ply(&grid(50)).as_bytes()),
+        "out.ply",
+    );
+    assert!(line.contains("50 points") && line.contains("128"), "{line}");
+}
+
+#[test]
+fn unknown_extension() {
+    let dir = tempfile::tempdir().unwrap();
+    let line = fails(&write(dir.path(), "cloud.foo", b"1 2 3\n"), "out.ply");
+    assert!(line.contains("cloud.foo"), "{line}");
+    let input = write(dir.path(), "good.ply", ascii_ply(&grid(500)).as_bytes());
+    let line = fails(&input, "out.bar");
+    assert!(line.contains("out.bar"), "{line}");
+}
+
+#[test]
+fn unwritable_output_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "good.ply", ascii_ply(&grid(500)).as_bytes());
+    let run = bounded_paths(&[&"detect", &input, &"-o", &"/nonexistent-dir/out.ply"]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("/nonexistent-dir"), "{err}");
+}

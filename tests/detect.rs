@@ -1,0 +1,81 @@
+//! `bounded detect` on a generated cloud in every format, reading the output back.
+
+mod common;
+
+use bounded_data::format;
+use bounded_data::table::{Column, PointTable, Property};
+use bounded_geom::Class;
+use common::{bounded_paths, box_cloud, stderr};
+
+#[test]
+fn detect_in_every_format_keeps_points_and_properties_and_finds_creases() {
+    let labelled = box_cloud(6000, 3);
+    let n = labelled.cloud.len();
+    let mut table = PointTable::new(labelled.cloud.clone());
+    let intensity: Vec<u16> = (0..n).map(|i| (i % 1000) as u16).collect();
+    table.set_property(Property::new("intensity", Column::U16(intensity)));
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["ply", "pcd", "xyz", "txt", "csv", "las", "laz"] {
+        let input = dir.path().join(format!("in.{ext}"));
+        let output = dir.path().join(format!("out.{ext}"));
+        format::write(&input, &table).unwrap();
+        let run = bounded_paths(&[&"detect", &input, &"-o", &output]);
+        assert!(run.status.success(), "{ext}: {}", stderr(&run));
+        assert!(
+            stderr(&run).contains("sharp edge"),
+            "{ext}: summary missing"
+        );
+
+        let back = format::read(&output).unwrap();
+        assert_eq!(back.len(), n, "{ext}: point count");
+        let intensity_back = back.property("intensity").expect("intensity kept");
+        assert_eq!(intensity_back.get_f64(17), 17.0, "{ext}: intensity value");
+        for name in ["p_nonedge", "p_sharp", "p_boundary"] {
+            assert!(back.property(name).is_some(), "{ext}: {name} missing");
+        }
+        // LAS keeps the class in its Classification field with its own codes.
+        let class_name = if ext.starts_with("la") {
+            "classification"
+        } else {
+            "class"
+        };
+        let class = back.property(class_name).expect("class column");
+        let sharp_code = if ext.starts_with("la") { 64.0 } else { 1.0 };
+        let (mut found, mut true_sharp) = (0usize, 0usize);
+        for (i, &truth) in labelled.labels.iter().enumerate() {
+            if truth == Class::Sharp {
+                true_sharp += 1;
+                found += usize::from(class.get_f64(i) == sharp_code);
+            }
+        }
+        assert!(
+            found * 2 > true_sharp,
+            "{ext}: only {found} of {true_sharp} crease points detected"
+        );
+    }
+}
+
+#[test]
+fn detect_writes_positions_back_at_full_precision() {
+    // UTM-like coordinates: the output must keep them, not the re-centred f32 values.
+    let labelled = box_cloud(3000, 5);
+    let shifted: Vec<[f64; 3]> = (0..labelled.cloud.len())
+        .map(|i| {
+            let p = labelled.cloud.position_f64(i);
+            [p[0] + 512_000.25, p[1] + 5_403_150.5, p[2] + 300.0]
+        })
+        .collect();
+    let cloud = bounded_geom::PointCloud::from_f64(&shifted).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("utm.ply"), dir.path().join("out.ply"));
+    format::write(&input, &PointTable::new(cloud)).unwrap();
+    let run = bounded_paths(&[&"detect", &input, &"-o", &output]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let back = format::read(&output).unwrap();
+    let p = back.cloud.position_f64(10);
+    assert!(
+        (p[1] - shifted[10][1]).abs() < 1e-6,
+        "{p:?} vs {:?}",
+        shifted[10]
+    );
+}
