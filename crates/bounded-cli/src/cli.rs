@@ -160,10 +160,10 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = ColourBy::Class)]
     pub by: ColourBy,
     /// View direction: azimuth,elevation in degrees.
-    #[arg(long, value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_delimiter = ',')]
     pub view: Option<Vec<f64>>,
     /// Picture size: width,height in pixels.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_value = "1024,768")]
+    #[arg(long, value_delimiter = ',', default_value = "1024,768")]
     pub size: Vec<usize>,
 }
 

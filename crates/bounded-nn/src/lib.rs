@@ -46,13 +46,11 @@ pub use model::{CLASS_NAMES, LayerWeights, Model, ModelConfig, N_CLASSES};
 pub use standardisation::Standardisation;
 pub use training::{Progress, TrainConfig, TrainedModel, train};
 
-/// The embedded default model (4 scales of 128, 64, 32, 16 neighbours x 12 features).
-///
-/// PLACEHOLDER until the project trains the real one: the current file was made by
-/// `examples/toy_model.rs` on a synthetic toy rule and carries no knowledge of point clouds.
+/// The embedded default model (4 scales of 128, 64, 32, 16 neighbours x 12 features), trained
+/// on generated sets only by the `bounded train` command recorded in the file and in README.md.
 const DEFAULT_MODEL: &[u8] = include_bytes!("../models/default.bmodel");
 
-/// The classifier embedded in the library (see the placeholder note on the model file).
+/// The classifier embedded in the library.
 pub fn default_model() -> Result<Classifier, NnError> {
     Classifier::from_bytes(DEFAULT_MODEL)
 }
