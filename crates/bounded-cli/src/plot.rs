@@ -25,7 +25,7 @@ pub const PALETTE: [Rgb; 8] = [
     [23, 190, 207],
 ];
 
-const WIDTH: usize = 760;
+const WIDTH: usize = 920;
 const HEIGHT: usize = 560;
 const LEFT: i64 = 70;
 const TOP: i64 = 40;

@@ -52,7 +52,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let start = Instant::now();
     let schedule = if args.quick {
         Schedule {
-            iterations: 300,
+            iterations: 1000,
             runs: 1,
             seed: 1,
         }
@@ -68,9 +68,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         ..schedule
     };
     eprintln!(
-        "bench: {} mode, expected duration about {} minutes on 2 cores",
+        "bench: {} mode, expected duration about {} minutes on 2 cores (full mode peaks near 10 GB of memory)",
         if args.quick { "quick" } else { "full" },
-        if args.quick { 4 } else { 35 }
+        if args.quick { 4 } else { 12 }
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
