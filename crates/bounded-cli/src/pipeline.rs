@@ -23,16 +23,12 @@ pub struct Detection {
 impl Detection {
     /// Points per class (non-edge, sharp, boundary).
     pub fn class_counts(&self) -> [usize; 3] {
-        let mut counts = [0; 3];
-        for &c in &self.classes {
-            counts[c as usize] += 1;
-        }
-        counts
+        Class::counts(&self.classes)
     }
 
     /// The classes as their integer codes.
     pub fn codes(&self) -> Vec<u8> {
-        self.classes.iter().map(|&c| c as u8).collect()
+        Class::codes(&self.classes)
     }
 }
 

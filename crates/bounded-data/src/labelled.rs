@@ -12,10 +12,6 @@ pub struct LabelledCloud {
 impl LabelledCloud {
     /// Number of points of each class, indexed by `Class as usize`.
     pub fn class_counts(&self) -> [usize; 3] {
-        let mut counts = [0; 3];
-        for &label in &self.labels {
-            counts[label as usize] += 1;
-        }
-        counts
+        Class::counts(&self.labels)
     }
 }

@@ -17,6 +17,20 @@ impl Class {
     /// All classes, in code order.
     pub const ALL: [Class; 3] = [Class::NonEdge, Class::Sharp, Class::Boundary];
 
+    /// Number of entries of each class in `classes`, indexed by code.
+    pub fn counts(classes: &[Class]) -> [usize; 3] {
+        let mut counts = [0; 3];
+        for &class in classes {
+            counts[class as usize] += 1;
+        }
+        counts
+    }
+
+    /// The integer codes of `classes`, as the classifier and the metrics take them.
+    pub fn codes(classes: &[Class]) -> Vec<u8> {
+        classes.iter().map(|&c| c as u8).collect()
+    }
+
     /// The class with code `code`, if any.
     pub fn from_code(code: u8) -> Option<Class> {
         Class::ALL.get(usize::from(code)).copied()
@@ -35,6 +49,13 @@ impl Class {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn counts_and_codes_of_a_list() {
+        let classes = [Class::Sharp, Class::NonEdge, Class::Sharp, Class::Boundary];
+        assert_eq!(Class::counts(&classes), [1, 2, 1]);
+        assert_eq!(Class::codes(&classes), vec![1, 0, 1, 2]);
+    }
 
     #[test]
     fn codes_round_trip() {

@@ -160,34 +160,32 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         train_s,
     )?);
 
-    // 4: ablations.
+    // 4: ablations; the configuration of the main model reuses it instead of retraining.
+    let ablation = |label: &str, target: &FeatureConfig| -> Result<String> {
+        let ablated;
+        let model = if *target == main {
+            &classifier
+        } else {
+            ablated = trained(&train_full, &full, target, &ablation_schedule)?;
+            &ablated
+        };
+        ablation_row(label, model, &full, target, &sets)
+    };
     report.push_str("## Feature ablation (4 scales)\n\n| features | Default MCC | Default F1 | ABC MCC | ABC F1 |\n|---|---|---|---|---|\n");
     for (label, groups) in feature_ablations() {
         let target = FeatureConfig {
             scales: main.scales.clone(),
             groups,
         };
-        let ablated;
-        let model = if target == main {
-            &classifier
-        } else {
-            ablated = trained(&train_full, &full, &target, &ablation_schedule)?;
-            &ablated
-        };
-        report.push_str(&ablation_row(label, model, &full, &target, &sets)?);
+        report.push_str(&ablation(label, &target)?);
     }
     report.push_str("\n## Scale ablation (all features)\n\n| scales | Default MCC | Default F1 | ABC MCC | ABC F1 |\n|---|---|---|---|---|\n");
     for count in [2, 4, 8, 16] {
         let target = FeatureConfig::ablation(count, FeatureGroups::BOUNDED)?;
-        let ablated;
-        let model = if target == main {
-            &classifier
-        } else {
-            ablated = trained(&train_full, &full, &target, &ablation_schedule)?;
-            &ablated
-        };
-        let label = format!("{count}: {:?}", target.scales);
-        report.push_str(&ablation_row(&label, model, &full, &target, &sets)?);
+        report.push_str(&ablation(
+            &format!("{count}: {:?}", target.scales),
+            &target,
+        )?);
     }
 
     // 5: noise and boundaries.
@@ -216,7 +214,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         BOUNDARY_EVAL.0,
         BOUNDARY_EVAL.1,
         eval::medians_table(&[b]),
-        pooled(&boundary).binary(Class::Boundary as u8).f1(),
+        eval::pooled(&boundary).binary(Class::Boundary as u8).f1(),
         eval::confusion_table(&boundary)
     );
     let _ = writeln!(
@@ -330,7 +328,7 @@ fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Resul
     clouds
         .into_iter()
         .map(|(name, labelled)| {
-            let truth = labelled.labels.iter().map(|&c| c as u8).collect();
+            let truth = Class::codes(&labelled.labels);
             let features = train::feature_set(&[(name.clone(), labelled)], full, "features16")?;
             Ok(Featured {
                 name,
@@ -375,14 +373,6 @@ fn score(
             })
         })
         .collect()
-}
-
-fn pooled(results: &[ModelResult]) -> ConfusionMatrix {
-    let mut total = ConfusionMatrix::default();
-    for r in results {
-        total.add(&r.matrix);
-    }
-    total
 }
 
 fn ablation_row(

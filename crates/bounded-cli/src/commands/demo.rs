@@ -73,8 +73,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         .with_context(|| format!("cannot create {}", args.output.display()))?;
     let (ply, png) = (args.output.join("demo.ply"), args.output.join("demo.png"));
     let mut table = PointTable::new(scene.cloud.clone());
-    let truth = scene.labels.iter().map(|&c| c as u8).collect();
-    table.set_property(Property::new("truth", Column::U8(truth)));
+    let truth = Class::codes(&scene.labels);
+    table.set_property(Property::new("truth", Column::U8(truth.clone())));
     format::write_annotated(&ply, &table, &detection.classes, &detection.probabilities)?;
     let view = View {
         azimuth: 20.0,
@@ -82,7 +82,6 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     };
     render::picture(&scene.cloud, &detection.classes, view, [1600, 600]).save_png(&png)?;
 
-    let truth: Vec<u8> = scene.labels.iter().map(|&c| c as u8).collect();
     let matrix = ConfusionMatrix::from_labels(&truth, &detection.codes())?;
     let n = scene.cloud.len();
     println!(

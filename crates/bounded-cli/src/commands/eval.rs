@@ -68,7 +68,7 @@ pub fn evaluate(
         .map(|(name, labelled)| {
             let detection = pipeline::detect(&labelled.cloud, classifier, config, false)
                 .with_context(|| name.clone())?;
-            let truth: Vec<u8> = labelled.labels.iter().map(|&c| c as u8).collect();
+            let truth = Class::codes(&labelled.labels);
             bar.inc(1);
             Ok(ModelResult {
                 name: name.clone(),
@@ -164,12 +164,18 @@ pub fn medians_table(methods: &[MethodResults]) -> String {
     out
 }
 
-/// Markdown table of the 3-class confusion summed over `results` (rows truth).
-pub fn confusion_table(results: &[ModelResult]) -> String {
+/// The 3-class confusion summed over `results`.
+pub fn pooled(results: &[ModelResult]) -> ConfusionMatrix {
     let mut total = ConfusionMatrix::default();
     for r in results {
         total.add(&r.matrix);
     }
+    total
+}
+
+/// Markdown table of the 3-class confusion summed over `results` (rows truth).
+pub fn confusion_table(results: &[ModelResult]) -> String {
+    let total = pooled(results);
     let mut out =
         String::from("| truth \\ predicted | non-edge | sharp | boundary |\n|---|---|---|---|\n");
     for class in Class::ALL {
