@@ -62,11 +62,19 @@ pub enum ShapeKind {
     ThinPlate,
     /// A box with 1..4 slices cut off by random planes (corners and creases of any angle).
     CutBlock,
+    /// A turned part: a revolved profile of small steps, chamfers and grooves, so creases
+    /// lie a few point spacings apart as on machined CAD parts.
+    Turned,
+    /// A thin-walled cup, round or polygonal, possibly with a flange: both sides of a wall
+    /// and both creases of its rim fall into one neighbourhood.
+    Cup,
+    /// A block with narrow ribs and slots along its top (parallel creases close together).
+    Ribbed,
 }
 
 impl ShapeKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [ShapeKind; 21] = [
+    pub const ALL: [ShapeKind; 24] = [
         ShapeKind::Box,
         ShapeKind::FractalCube,
         ShapeKind::Stairs,
@@ -88,6 +96,9 @@ impl ShapeKind {
         ShapeKind::OpenBox,
         ShapeKind::ThinPlate,
         ShapeKind::CutBlock,
+        ShapeKind::Turned,
+        ShapeKind::Cup,
+        ShapeKind::Ribbed,
     ];
 
     /// Snake-case name, used in generated cloud names.
@@ -114,6 +125,9 @@ impl ShapeKind {
             ShapeKind::OpenBox => "open_box",
             ShapeKind::ThinPlate => "thin_plate",
             ShapeKind::CutBlock => "cut_block",
+            ShapeKind::Turned => "turned",
+            ShapeKind::Cup => "cup",
+            ShapeKind::Ribbed => "ribbed",
         }
     }
 
@@ -274,6 +288,18 @@ impl ShapeKind {
                 m.append(&other);
                 m
             }
+            ShapeKind::Turned => revolve(&turned_profile(rng), ROUND_SEGMENTS, TAU, false),
+            ShapeKind::Cup => {
+                let segments = if rng.random_bool(0.7) {
+                    ROUND_SEGMENTS
+                } else {
+                    rng.random_range(4..=8)
+                };
+                revolve(&cup_profile(rng), segments, TAU, false)
+            }
+            ShapeKind::Ribbed => {
+                extrude(&ribbed(rng), rng.random_range(0.3..1.0), true, [true, true])
+            }
         }
     }
 }
@@ -300,6 +326,74 @@ fn stairs(rng: &mut impl Rng) -> Vec<P2> {
         profile.push([x, y]);
     }
     profile.push([x, 0.0]);
+    profile
+}
+
+/// A size drawn log-uniformly from `lo..hi`: small details as often as large ones.
+fn detail(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
+    rng.random_range(lo.ln()..hi.ln()).exp()
+}
+
+/// A `(radius, z)` profile from the bottom pole to the top pole through 3..8 sections
+/// whose radius changes by a square step or a 45-degree chamfer of 0.01..0.1.
+fn turned_profile(rng: &mut impl Rng) -> Vec<P2> {
+    let mut r = rng.random_range(0.2..0.45);
+    let mut z = 0.0;
+    let mut profile = vec![[0.0, 0.0], [r, 0.0]];
+    for _ in 0..rng.random_range(3..=8) {
+        z += detail(rng, 0.01, 0.2);
+        profile.push([r, z]);
+        let step = detail(rng, 0.01, 0.1);
+        let next = if r + step > 0.5 || (r - step > 0.08 && rng.random_bool(0.5)) {
+            r - step
+        } else {
+            r + step
+        };
+        if rng.random_bool(0.3) {
+            z += step;
+        }
+        r = next;
+        profile.push([r, z]);
+    }
+    z += detail(rng, 0.01, 0.2);
+    profile.extend([[r, z], [0.0, z]]);
+    profile
+}
+
+/// A `(radius, z)` profile of a cup with walls and bottom 0.015..0.08 thick, half of them
+/// with an outward flange at the rim.
+fn cup_profile(rng: &mut impl Rng) -> Vec<P2> {
+    let (r, h) = (rng.random_range(0.2..0.45), rng.random_range(0.3..0.9));
+    let (wall, bottom) = (detail(rng, 0.015, 0.08), detail(rng, 0.015, 0.1));
+    let mut profile = vec![[0.0, 0.0], [r, 0.0]];
+    if rng.random_bool(0.5) {
+        let (reach, thick) = (detail(rng, 0.02, 0.15), detail(rng, 0.015, 0.06));
+        profile.extend([[r, h - thick], [r + reach, h - thick], [r + reach, h]]);
+    } else {
+        profile.push([r, h]);
+    }
+    profile.extend([[r - wall, h], [r - wall, bottom], [0.0, bottom]]);
+    profile
+}
+
+/// A block profile whose top carries ribs and slots 0.015..0.12 wide and 0.01..0.15 high,
+/// 0.015..0.2 apart.
+fn ribbed(rng: &mut impl Rng) -> Vec<P2> {
+    let (w, h) = (rng.random_range(0.5..1.0), rng.random_range(0.2..0.5));
+    let mut profile = vec![[0.0, 0.0], [w, 0.0], [w, h]];
+    let mut x = w - detail(rng, 0.015, 0.2);
+    while x > 0.05 {
+        let width = detail(rng, 0.015, 0.12).min(x - 0.03);
+        let height = detail(rng, 0.01, 0.15);
+        let y = if rng.random_bool(0.5) {
+            h + height
+        } else {
+            h - height.min(0.8 * h)
+        };
+        profile.extend([[x, h], [x, y], [x - width, y], [x - width, h]]);
+        x -= width + detail(rng, 0.015, 0.2);
+    }
+    profile.push([0.0, h]);
     profile
 }
 
