@@ -48,6 +48,7 @@ impl ScalarType {
 
     /// Encodes `value` converted to this type (`as` semantics: saturating, truncating) into
     /// the first [`size`](Self::size) bytes of `out`.
+    #[inline]
     pub(crate) fn encode_f64(self, value: f64, out: &mut [u8], endian: Endian) {
         match self {
             ScalarType::U8 => u8::from_f64(value).encode(out, endian),
@@ -277,6 +278,16 @@ impl Column {
         endian: Endian,
     ) {
         with_values!(self, v => encode_from(v, first, out, stride, offset, endian))
+    }
+
+    /// Calls `f(k, value)` for the values `first + k`, `k < n`, as `f64`: one typed loop per
+    /// column type rather than a type dispatch per value.
+    pub(crate) fn for_each_f64(&self, first: usize, n: usize, mut f: impl FnMut(usize, f64)) {
+        with_values!(self, v => {
+            for (k, x) in v[first..first + n].iter().enumerate() {
+                f(k, x.to_f64());
+            }
+        })
     }
 
     /// Writes value `i` as text (shortest representation that reads back exactly).
