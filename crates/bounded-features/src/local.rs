@@ -9,10 +9,10 @@ pub(crate) const ALL_FEATURES: usize = 15;
 
 /// Per-thread buffers, reused from point to point so the hot loop never allocates.
 pub(crate) struct Scratch {
-    /// One moment row per neighbour (see [`Row`]).
-    rows: Vec<Row>,
-    /// Buffers of the normal's half-neighbourhood selection.
-    half: HalfScratch,
+    /// Neighbours relative to the query point, in `f64`.
+    local: Vec<[f64; 3]>,
+    /// (squared distance to the centroid, rank) for the normal's half neighbourhood.
+    near_centroid: Vec<(u64, u32)>,
     /// Moments of each scale's neighbourhood, smallest scale first.
     prefix: Vec<Moments>,
 }
@@ -20,99 +20,83 @@ pub(crate) struct Scratch {
 impl Scratch {
     pub(crate) fn new(k0: usize) -> Self {
         Self {
-            rows: Vec::with_capacity(k0),
-            half: HalfScratch::default(),
+            local: Vec::with_capacity(k0),
+            near_centroid: Vec::with_capacity(k0),
             prefix: Vec::new(),
         }
     }
 }
 
-/// Squared distances to a centroid (as `f64` bits), by rank and as selected.
-#[derive(Default)]
-struct HalfScratch {
-    by_rank: Vec<u64>,
-    selected: Vec<u64>,
-}
-
-/// Lanes of a moment row: `x, y, z`, then `xx, xy, xz, yy, yz, zz`, then the count.
-const LANES: usize = 10;
-/// Lane of the first product (`xx`).
-const OUTER: usize = 3;
-/// Lane of the count.
-const COUNT: usize = 9;
-
-/// A neighbour relative to the query point, in `f64`, with its products precomputed:
-/// every set's moments are then plain lane-wise sums, which the compiler vectorises,
-/// and the products are computed once per neighbour instead of once per set.
-#[derive(Clone, Copy)]
-struct Row([f64; LANES]);
-
-impl Row {
-    fn new(q: [f64; 3]) -> Self {
-        let [x, y, z] = q;
-        Self([x, y, z, x * x, x * y, x * z, y * y, y * z, z * z, 1.0])
-    }
-
-    fn point(&self) -> [f64; 3] {
-        [self.0[0], self.0[1], self.0[2]]
-    }
-}
-
 /// Count, sum and sum of outer products of points (relative to the query point, so
-/// the one-pass covariance loses only ~1e-16 of the neighbourhood's squared radius),
-/// as a sum of [`Row`]s.
+/// the one-pass covariance loses only ~1e-16 of the neighbourhood's squared radius).
 #[derive(Clone, Copy, Default)]
-struct Moments([f64; LANES]);
+struct Moments {
+    n: usize,
+    sum: [f64; 3],
+    outer: Sym3,
+}
 
 impl Moments {
-    fn add(&mut self, row: &Row) {
-        for (m, r) in self.0.iter_mut().zip(row.0) {
-            *m += r;
+    fn add(&mut self, q: [f64; 3]) {
+        self.n += 1;
+        for (s, c) in self.sum.iter_mut().zip(q) {
+            *s += c;
         }
+        let o = &mut self.outer;
+        o.xx += q[0] * q[0];
+        o.xy += q[0] * q[1];
+        o.xz += q[0] * q[2];
+        o.yy += q[1] * q[1];
+        o.yz += q[1] * q[2];
+        o.zz += q[2] * q[2];
     }
 
-    /// Adds `row` when `keep`; otherwise adds +0.0, which leaves every sum unchanged
-    /// (sums start at +0.0 and so never become -0.0). Branch-free: the U / L split
-    /// is unpredictable.
-    fn add_if(&mut self, row: &Row, keep: bool) {
-        for (m, r) in self.0.iter_mut().zip(row.0) {
-            *m += if keep { r } else { 0.0 };
-        }
-    }
-
-    fn count(&self) -> f64 {
-        self.0[COUNT]
+    fn of(pts: impl Iterator<Item = [f64; 3]>) -> Self {
+        let mut m = Self::default();
+        pts.for_each(|q| m.add(q));
+        m
     }
 
     /// The moments of the points in `self` but not in `part`.
     fn minus(&self, part: &Self) -> Self {
-        Self(std::array::from_fn(|i| self.0[i] - part.0[i]))
+        let (a, b) = (&self.outer, &part.outer);
+        Self {
+            n: self.n - part.n,
+            sum: [0, 1, 2].map(|i| self.sum[i] - part.sum[i]),
+            outer: Sym3 {
+                xx: a.xx - b.xx,
+                xy: a.xy - b.xy,
+                xz: a.xz - b.xz,
+                yy: a.yy - b.yy,
+                yz: a.yz - b.yz,
+                zz: a.zz - b.zz,
+            },
+        }
     }
 
     /// Mean (zero for no points).
     fn mean(&self) -> [f64; 3] {
-        let n = self.count().max(1.0);
-        [0, 1, 2].map(|a| self.0[a] / n)
+        self.sum.map(|c| c / self.n.max(1) as f64)
     }
 
     /// Population covariance (divided by the count).
     fn covariance(&self) -> Sym3 {
-        let inv = 1.0 / self.count().max(1.0);
+        let inv = 1.0 / self.n.max(1) as f64;
         let m = self.mean();
-        let o = &self.0[OUTER..OUTER + 6];
+        let o = &self.outer;
         Sym3 {
-            xx: o[0] * inv - m[0] * m[0],
-            xy: o[1] * inv - m[0] * m[1],
-            xz: o[2] * inv - m[0] * m[2],
-            yy: o[3] * inv - m[1] * m[1],
-            yz: o[4] * inv - m[1] * m[2],
-            zz: o[5] * inv - m[2] * m[2],
+            xx: o.xx * inv - m[0] * m[0],
+            xy: o.xy * inv - m[0] * m[1],
+            xz: o.xz * inv - m[0] * m[2],
+            yy: o.yy * inv - m[1] * m[1],
+            yz: o.yz * inv - m[1] * m[2],
+            zz: o.zz * inv - m[2] * m[2],
         }
     }
 
     /// Eigenvalues of the covariance, descending, clamped at 0; zeros below 2 points.
     fn variances(&self) -> [f64; 3] {
-        if self.count() < 2.0 {
+        if self.n < 2 {
             return [0.0; 3];
         }
         self.covariance().eigenvalues().map(|v| v.max(0.0))
@@ -130,27 +114,25 @@ pub(crate) fn point_features(
 ) {
     // Centre on the query point in f64: small, well-conditioned coordinates.
     let p = points[neighbours[0] as usize].map(f64::from);
-    scratch.rows.clear();
-    scratch.rows.extend(neighbours.iter().map(|&j| {
+    scratch.local.clear();
+    scratch.local.extend(neighbours.iter().map(|&j| {
         let q = points[j as usize];
-        Row::new([0, 1, 2].map(|a| f64::from(q[a]) - p[a]))
+        [0, 1, 2].map(|a| f64::from(q[a]) - p[a])
     }));
-    let rows = &scratch.rows;
+    let local = &scratch.local;
     // Moments of every scale from one pass: scales are prefixes, smallest first.
     scratch.prefix.clear();
     let mut running = Moments::default();
-    let mut done = 0;
     for &k in config.scales.iter().rev() {
-        rows[done..k].iter().for_each(|r| running.add(r));
-        done = k;
+        local[running.n..k].iter().for_each(|&q| running.add(q));
         scratch.prefix.push(running);
     }
     let mut largest: Option<(Moments, Frame)> = None;
     let per_scale = config.features_per_scale();
     let scales = config.scales.iter().zip(scratch.prefix.iter().rev());
     for ((&k, &moments), out) in scales.zip(out.chunks_exact_mut(per_scale)) {
-        let frame = frame(&rows[..k], &moments, &mut scratch.half);
-        let mut all = scale_features(&rows[..k], &moments, &frame);
+        let frame = frame(&local[..k], &moments, &mut scratch.near_centroid);
+        let mut all = scale_features(&local[..k], &moments, &frame);
         if let Some((m0, f0)) = &largest {
             // c: this scale's centroid against the rest of the k0 neighbourhood,
             // in the k0 frame.
@@ -178,17 +160,25 @@ struct Frame {
 
 /// Centroid, normalisation and oriented normal of `pts` (relative to the query point,
 /// which is therefore the origin), whose moments are `moments`.
-fn frame(rows: &[Row], moments: &Moments, scratch: &mut HalfScratch) -> Frame {
+fn frame(pts: &[[f64; 3]], moments: &Moments, near_centroid: &mut Vec<(u64, u32)>) -> Frame {
     let m = moments.mean();
     let variances = moments.variances();
     let scale = 2.0 / (variances[0].sqrt() + variances[1].sqrt());
     let scale = if scale.is_finite() { scale } else { 1.0 };
     // Normal from the floor(k/2) points closest to the centroid: robust to outliers.
-    let half = rows.len() / 2;
+    let half = pts.len() / 2;
     let raw = if half == 0 {
         [0.0, 0.0, 1.0]
     } else {
-        closest(rows, m, half, scratch)
+        near_centroid.clear();
+        // Non-negative f64 bits order like the values: integer keys, ties by rank.
+        near_centroid.extend(
+            pts.iter()
+                .zip(0u32..)
+                .map(|(q, j)| (dist2(*q, m).to_bits(), j)),
+        );
+        near_centroid.select_nth_unstable(half - 1);
+        Moments::of(near_centroid[..half].iter().map(|&(_, j)| pts[j as usize]))
             .covariance()
             .eigen()
             .smallest_vector
@@ -199,29 +189,6 @@ fn frame(rows: &[Row], moments: &Moments, scratch: &mut HalfScratch) -> Frame {
         normal: orient(raw, m.map(|c| -c)),
         variances,
     }
-}
-
-/// Moments of the `half` rows closest to `m`, ties by rank, summed in rank order.
-///
-/// Selecting plain `u64` keys (non-negative `f64` bits order like the values) only
-/// to find the `half`-th distance, then one branch-free pass in rank order, beats
-/// selecting (distance, rank) pairs and gathering the winners.
-fn closest(rows: &[Row], m: [f64; 3], half: usize, scratch: &mut HalfScratch) -> Moments {
-    let dists = &mut scratch.by_rank;
-    dists.clear();
-    dists.extend(rows.iter().map(|r| dist2(r.point(), m).to_bits()));
-    let keys = &mut scratch.selected;
-    keys.clone_from(dists);
-    let cut = *keys.select_nth_unstable(half - 1).1;
-    // Rows closer than `cut` are in; rows at `cut` fill the remaining places.
-    let mut ties = half - dists.iter().filter(|&&d| d < cut).count();
-    let mut moments = Moments::default();
-    for (r, &d) in rows.iter().zip(dists.iter()) {
-        let tie = d == cut && ties > 0;
-        ties -= usize::from(tie);
-        moments.add_if(r, d < cut || tie);
-    }
-    moments
 }
 
 /// Orients the unit normal `n` so that `<s, n> >= 0`, where `s = p_i - m` (the query
@@ -243,24 +210,25 @@ pub(crate) fn orient(n: [f64; 3], s: [f64; 3]) -> [f64; 3] {
 ///
 /// U holds the points with `<p - m, n> >= 0` (the sign of `<p^, n>`, as the scale
 /// factor is positive); L the rest, whose moments are the whole set's minus U's.
-fn scale_features(rows: &[Row], moments: &Moments, f: &Frame) -> [f64; ALL_FEATURES] {
+fn scale_features(pts: &[[f64; 3]], moments: &Moments, f: &Frame) -> [f64; ALL_FEATURES] {
     let mut all = [0.0; ALL_FEATURES];
     let s2 = f.scale * f.scale;
     all[..3].copy_from_slice(&f.variances.map(|v| v * s2));
     // <q - m, n> >= 0  <=>  <q, n> >= <m, n>
     let threshold = dot(f.mean, f.normal);
-    let mut upper = Moments::default();
-    for r in rows {
-        upper.add_if(r, dot(r.point(), f.normal) >= threshold);
-    }
+    let upper = Moments::of(
+        pts.iter()
+            .copied()
+            .filter(|q| dot(*q, f.normal) >= threshold),
+    );
     let lower = moments.minus(&upper);
     all[3..6].copy_from_slice(&upper.variances().map(|v| v * s2));
     all[6..9].copy_from_slice(&lower.variances().map(|v| v * s2));
-    if upper.count() > 0.0 && lower.count() > 0.0 {
+    if upper.n > 0 && lower.n > 0 {
         let (mu, ml) = (upper.mean(), lower.mean());
         [all[9], all[10]] = split([0, 1, 2].map(|a| (mu[a] - ml[a]) * f.scale), f.normal);
     }
-    // The query point is the origin of `rows`.
+    // The query point is the origin of `pts`.
     [all[11], all[12]] = split(f.mean.map(|c| -c * f.scale), f.normal);
     all
 }
