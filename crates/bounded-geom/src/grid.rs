@@ -6,11 +6,18 @@
 //! candidates lie closer than the candidate box's nearest face, which makes the answer
 //! exact. Otherwise the box grows, and as a last resort (isolated points) cells are
 //! visited in order of distance.
+//!
+//! Within a cell, each query first filters the shared candidates with the triangle
+//! bound `d_k(p) <= d_k(prev) + |p - prev|` from the previous query (consecutive
+//! queries are Morton neighbours, so it keeps ~1.5 k candidates and lets whole cells
+//! be skipped). Exactness never depends on that bound: whenever `k` candidates lie
+//! below a limit that is inside the box, they are the true `k` nearest; with fewer
+//! (a bound too tight through rounding) the query falls back to the box's own limit.
 
 use std::ops::Range;
 
-use crate::knn::dist2;
 use crate::morton::{BITS, Quantiser, code};
+use crate::select::{Selection, key_distance, key_index};
 
 /// Cells on each side of the query cell in the shared candidate box.
 const RING: i64 = 2;
@@ -50,7 +57,7 @@ type CellBox = ([f64; 3], [f64; 3]);
 pub(crate) struct Scratch {
     shared: Candidates,
     own: Candidates,
-    keys: Vec<u64>,
+    select: Selection,
     by_distance: Vec<(f64, u32)>,
 }
 
@@ -177,24 +184,26 @@ impl Grid {
         let k = rows.len() / queries.len();
         let c = self.coords(s, cell);
         self.gather(s, c, RING, &mut scratch.shared);
-        // The previous query's k-th distance predicts this one's: filtering candidates
-        // at 1.5 times it (never beyond the box's exact limit) shrinks the selection.
-        let mut guess = f32::INFINITY;
+        // The previous query's k neighbours lie within d_k(prev) + |p - prev| of this
+        // one, so that bounds d_k(p): candidates beyond it are dropped before selection.
+        let mut prev: Option<([f32; 3], f32)> = None;
         for (pos, out) in queries.zip(rows.chunks_exact_mut(k)) {
             let p = s.points[pos];
             let q = s.order[pos];
             let exact = self.limit(s, c, RING, p);
-            let keys = &mut scratch.keys;
-            if (guess < exact && scratch.shared.best(p, q, guess, keys, out))
-                || scratch.shared.best(p, q, exact, keys, out)
+            let bound = prev.map_or(f32::INFINITY, |(x, kth)| reach(kth, x, p));
+            let sel = &mut scratch.select;
+            if (bound < exact && scratch.shared.best(p, q, bound, sel, out))
+                || scratch.shared.best(p, q, exact, sel, out)
             {
-                guess = key_distance(keys[k - 1]) * 1.5;
+                prev = Some((p, key_distance(sel.sorted(k)[k - 1])));
                 continue;
             }
+            prev = None;
             let solved = (RING + 1..=MAX_RING).any(|r| {
                 self.gather(s, c, r, &mut scratch.own);
                 let lim = self.limit(s, c, r, p);
-                scratch.own.best(p, q, lim, &mut scratch.keys, out)
+                scratch.own.best(p, q, lim, &mut scratch.select, out)
             });
             if !solved {
                 self.by_distance(s, p, q, scratch, out);
@@ -221,12 +230,12 @@ impl Grid {
             let cell = cell as usize;
             own.add(s, self.range(cell), self.cell_box(s, self.coords(s, cell)));
             if reach.is_infinite() && own.index.len() >= k {
-                own.best(p, q, f32::INFINITY, &mut sc.keys, out);
-                let kth = key_distance(sc.keys[k - 1]);
+                own.best(p, q, f32::INFINITY, &mut sc.select, out);
+                let kth = key_distance(sc.select.sorted(k)[k - 1]);
                 reach = f64::from(kth) * (1.0 + MARGIN);
             }
         }
-        own.best(p, q, f32::INFINITY, &mut sc.keys, out);
+        own.best(p, q, f32::INFINITY, &mut sc.select, out);
     }
 }
 
@@ -251,38 +260,30 @@ impl Candidates {
     /// The `out.len()` best candidates for point `p` (original index `q`) among those
     /// with squared distance below `lim`; false when there are too few.
     ///
-    /// Keys order the query itself first (key 0), then by distance, then by index.
-    fn best(&self, p: [f32; 3], q: u32, lim: f32, keys: &mut Vec<u64>, out: &mut [u32]) -> bool {
+    /// Order: the query itself first, then by distance, then by index.
+    fn best(&self, p: [f32; 3], q: u32, lim: f32, sel: &mut Selection, out: &mut [u32]) -> bool {
         let k = out.len();
-        // Branch-free filter: always write, advance only for kept keys.
-        keys.resize(self.index.len(), 0);
-        let mut kept = 0;
+        sel.clear();
         let mut begin = 0;
         for (end, cell) in &self.cells {
-            let range = std::mem::replace(&mut begin, *end)..*end;
+            let r = std::mem::replace(&mut begin, *end)..*end;
             // Skip cells whose every point is beyond the limit (with a rounding margin).
             if box_distance2(p, cell) * (1.0 - MARGIN) >= f64::from(lim) {
                 continue;
             }
-            let xyz = self.xs[range.clone()].iter().zip(&self.ys[range.clone()]);
-            let xyz = xyz.zip(&self.zs[range.clone()]).zip(&self.index[range]);
-            for (((&x, &y), &z), &i) in xyz {
-                let d = dist2(p, [x, y, z]);
-                let key = (u64::from(d.to_bits()) << 32 | u64::from(i)) + 1;
-                keys[kept] = if i == q { 0 } else { key };
-                kept += usize::from(d < lim);
-            }
+            let xyz = (
+                &self.xs[r.clone()],
+                &self.ys[r.clone()],
+                &self.zs[r.clone()],
+            );
+            sel.keep_within(p, q, lim, xyz, &self.index[r]);
         }
-        keys.truncate(kept);
-        if kept < k {
+        if sel.kept() < k {
             return false;
         }
-        if keys.len() > k {
-            keys.select_nth_unstable(k - 1);
-        }
-        keys[..k].sort_unstable();
-        for (o, &key) in out.iter_mut().zip(keys.iter()) {
-            *o = if key == 0 { q } else { (key - 1) as u32 };
+        sel.select(k);
+        for (o, &key) in out.iter_mut().zip(sel.sorted(k)) {
+            *o = key_index(key, q);
         }
         true
     }
@@ -299,11 +300,11 @@ fn box_distance2(p: [f32; 3], cell: &CellBox) -> f64 {
         .sum()
 }
 
-/// Squared distance stored in a neighbour key.
-fn key_distance(key: u64) -> f32 {
-    if key == 0 {
-        0.0
-    } else {
-        f32::from_bits(((key - 1) >> 32) as u32)
-    }
+/// Squared distance within which the `k` neighbours of a point at `prev`, the
+/// farthest at squared distance `kth`, all lie from `p`: an upper bound on `p`'s own
+/// `k`-th squared distance (triangle inequality, with a margin for `f32` rounding).
+fn reach(kth: f32, prev: [f32; 3], p: [f32; 3]) -> f32 {
+    let step = f64::from(crate::knn::dist2(prev, p)).sqrt();
+    let r = f64::from(kth).sqrt() + step;
+    (r * r * (1.0 + MARGIN)) as f32
 }

@@ -258,6 +258,33 @@ mod tests {
         }
     }
 
+    /// Consecutive queries of a cell prune candidates with the previous query's k-th
+    /// distance: quantised coordinates (many exactly equal distances), stacks of
+    /// duplicates and a sparse region must still give the brute-force lists.
+    #[test]
+    fn distance_bound_keeps_ties_and_duplicates_exact() {
+        let mut r = rng(3);
+        let mut pts: Vec<[f32; 3]> = (0..3000)
+            .map(|i| match i % 3 {
+                0 | 1 => [(r() * 24.0).floor(), (r() * 24.0).floor(), 0.0],
+                _ => [r() * 200.0, r() * 200.0, 50.0],
+            })
+            .collect();
+        for i in 0..300 {
+            pts.push(pts[i * 5]);
+        }
+        let c = cloud(pts.clone());
+        let idx = KnnIndex::new(&c).unwrap();
+        for k in [2, 33, 128] {
+            idx.for_each_chunk(k, 1000, |ch| {
+                for (j, &q) in ch.queries().iter().enumerate() {
+                    assert_eq!(ch.row(j), brute(&pts, q, k).as_slice(), "k {k} query {q}");
+                }
+            })
+            .unwrap();
+        }
+    }
+
     #[test]
     fn same_distances_as_kiddo() {
         use kiddo::{ImmutableKdTree, SquaredEuclidean};

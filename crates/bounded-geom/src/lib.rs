@@ -33,6 +33,7 @@ mod error;
 mod grid;
 mod knn;
 mod morton;
+mod select;
 
 pub use class::Class;
 pub use cloud::PointCloud;
