@@ -6,9 +6,8 @@
 //! spheres, tori, fillets) stay non-edge. Shapes get a random rotation, scale and
 //! anisotropic stretch of up to 1.25 per axis before their features are extracted, then are
 //! sampled in one of two [`Sampling`] modes (see there for the label rules), and perturbed by
-//! Gaussian noise (a multiple of the median nearest-neighbour spacing, isotropic or along the
-//! surface normal, see [`NoiseDirection`]; labels stay those of the clean points) and a few
-//! outliers (non-edge).
+//! Gaussian noise (a multiple of the median nearest-neighbour spacing; labels stay those of
+//! the clean points) and a few outliers (non-edge).
 //!
 //! Generation is deterministic: shape `i` of a set draws from its own ChaCha8 stream of the
 //! set's seed, so the same configuration gives the same clouds bit for bit, in parallel or
@@ -37,7 +36,6 @@ mod sample;
 mod shapes;
 mod vec3;
 
-pub use perturb::NoiseDirection;
 pub use sample::{Sampling, W_BORDER, W_SHARP};
 pub use shapes::ShapeKind;
 
@@ -128,9 +126,8 @@ pub struct SetConfig {
     pub shapes: usize,
     /// Points per cloud, drawn uniformly per shape (mesh-vertex mode reaches it within ~20%).
     pub points: RangeInclusive<usize>,
-    /// Noise levels, each shape picking one uniformly: the standard deviation (per
-    /// coordinate, or along the normal) as a multiple of the cloud's median
-    /// nearest-neighbour spacing. Each shape also picks a [`NoiseDirection`] at random.
+    /// Noise levels, each shape picking one uniformly: the standard deviation per coordinate
+    /// as a multiple of the cloud's median nearest-neighbour spacing.
     pub noise_levels: Vec<f64>,
     /// Fraction of outliers added to the 30% of shapes that get any.
     pub outlier_fraction: f64,
@@ -138,15 +135,14 @@ pub struct SetConfig {
 
 impl SetConfig {
     /// A configuration with the defaults: 5,000..30,000 points, noise levels 0, 0.1, 0.2,
-    /// 0.4, 0.6 and 0.9 x spacing (the noisy ABC clouds are displaced along the normal by
-    /// about 0.5, between 0.35 and 0.8 per model), 0.2% outliers.
+    /// 0.4 and 0.6 x spacing (the noisy ABC clouds sit near 0.23), 0.2% outliers.
     pub fn new(kind: SetKind, seed: u64, shapes: usize) -> Self {
         Self {
             kind,
             seed,
             shapes,
             points: 5_000..=30_000,
-            noise_levels: vec![0.0, 0.1, 0.2, 0.4, 0.6, 0.9],
+            noise_levels: vec![0.0, 0.1, 0.2, 0.4, 0.6],
             outlier_fraction: 0.002,
         }
     }
@@ -176,11 +172,6 @@ impl SetConfig {
         } else {
             self.noise_levels[rng.random_range(0..self.noise_levels.len())]
         };
-        let noise_direction = if rng.random_bool(0.5) {
-            NoiseDirection::Normal
-        } else {
-            NoiseDirection::Isotropic
-        };
         let outlier_fraction = if rng.random_bool(0.3) {
             self.outlier_fraction
         } else {
@@ -191,7 +182,6 @@ impl SetConfig {
             sampling,
             points,
             noise,
-            noise_direction,
             outlier_fraction,
             seed: rng.random(),
         }
@@ -217,11 +207,8 @@ pub struct ShapeSpec {
     pub sampling: Sampling,
     /// About how many points (exactly, in random mode, before outliers).
     pub points: usize,
-    /// Noise standard deviation (per coordinate, or along the normal), as a multiple of the
-    /// median spacing.
+    /// Noise standard deviation per coordinate, as a multiple of the median spacing.
     pub noise: f64,
-    /// Which way the noise displaces points.
-    pub noise_direction: NoiseDirection,
     /// Outliers, as a fraction of the points.
     pub outlier_fraction: f64,
     /// Seed of the shape's geometry, pose and sampling.
@@ -265,15 +252,7 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     let features = mesh.features();
     let mut sampled = sample::sample(&mesh, &features, spec.sampling, spec.points, &mut rng);
     let spacing = perturb::median_spacing(&sampled.points, sampled.spacing_hint);
-    let sigma = spec.noise * spacing;
-    match spec.noise_direction {
-        NoiseDirection::Isotropic => perturb::add_noise(&mut sampled.points, sigma, &mut rng),
-        NoiseDirection::Normal => perturb::add_normal_noise(&mut sampled.points, sigma, &mut rng)
-            .map_err(|source| DataError::Geom {
-            path: spec.kind.name().into(),
-            source,
-        })?,
-    }
+    perturb::add_noise(&mut sampled.points, spec.noise * spacing, &mut rng);
     let outliers = (spec.outlier_fraction * sampled.points.len() as f64).round() as usize;
     perturb::add_outliers(
         &mut sampled.points,
@@ -373,10 +352,6 @@ mod tests {
                     sampling,
                     points: 4000,
                     noise: 0.2,
-                    noise_direction: match sampling {
-                        Sampling::MeshVertex => NoiseDirection::Normal,
-                        Sampling::Random => NoiseDirection::Isotropic,
-                    },
                     outlier_fraction: 0.01,
                     seed: i as u64,
                 };
@@ -408,18 +383,12 @@ mod tests {
         // A flat disc: the noise is the only off-plane displacement. Its orientation is
         // random, so measure the spread along the fitted normal: the smallest
         // eigenvalue of the covariance, compared through the trace-free ratio below.
-        let cases = [
-            (0.2, NoiseDirection::Isotropic, 3.0),
-            (0.6, NoiseDirection::Isotropic, 3.0),
-            (0.6, NoiseDirection::Normal, 1.0),
-        ];
-        for (level, noise_direction, dimensions) in cases {
+        for level in [0.2, 0.6] {
             let spec = ShapeSpec {
                 kind: ShapeKind::Disc,
                 sampling: Sampling::MeshVertex,
                 points: 6000,
                 noise: level,
-                noise_direction,
                 outlier_fraction: 0.0,
                 seed: 11,
             };
@@ -442,9 +411,7 @@ mod tests {
                 .zip(&b)
                 .flat_map(|(p, q)| vec3::sub(*q, *p))
                 .collect();
-            // Mean squared displacement per coordinate, spread over `dimensions` of the 3.
-            let sd =
-                (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64 * 3.0 / dimensions).sqrt();
+            let sd = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
             assert!(
                 (sd / spacing - level).abs() < 0.05 * level,
                 "{level}: {}",

@@ -5,22 +5,9 @@
 use super::grid::{Grid, bounds};
 use super::sample::random_direction;
 use super::vec3::{V3, add, normalize, scale};
-use bounded_geom::{Class, GeomError, KnnIndex, PointCloud, Sym3};
+use bounded_geom::Class;
 use rand::Rng;
 use rand_distr::StandardNormal;
-
-/// Neighbours of the plane fit behind [`add_normal_noise`]'s normals.
-const NORMAL_NEIGHBOURS: usize = 12;
-
-/// Which way noise displaces points.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NoiseDirection {
-    /// Every coordinate independently (sampling jitter).
-    Isotropic,
-    /// Along the surface normal only, as range noise displaces scanned points and as the
-    /// noisy ABC evaluation clouds were made.
-    Normal,
-}
 
 /// Median nearest-neighbour distance; `hint` is a rough guess of it (the query reach is
 /// twice the hint, so points further than that from all others are ignored).
@@ -51,52 +38,6 @@ pub(crate) fn add_noise(points: &mut [V3], sigma: f64, rng: &mut impl Rng) {
             [(); 3].map(|()| sigma * rng.sample::<f64, _>(StandardNormal)),
         );
     }
-}
-
-/// Adds Gaussian noise of standard deviation `sigma` along each point's normal, the
-/// smallest principal axis of its [`NORMAL_NEIGHBOURS`] nearest clean points (on a crease
-/// that is about the bisector, like a mesh's vertex normal).
-pub(crate) fn add_normal_noise(
-    points: &mut [V3],
-    sigma: f64,
-    rng: &mut impl Rng,
-) -> Result<(), GeomError> {
-    if sigma <= 0.0 {
-        return Ok(());
-    }
-    let cloud = PointCloud::from_f64(points)?;
-    let index = KnnIndex::new(&cloud)?;
-    let clean = cloud.points();
-    let mut normals = vec![[0.0; 3]; points.len()];
-    index.for_each_chunk(NORMAL_NEIGHBOURS.min(points.len()), 4096, |chunk| {
-        for (row, &i) in chunk.queries().iter().enumerate() {
-            normals[i as usize] =
-                principal_normal(chunk.row(row).iter().map(|&j| clean[j as usize]));
-        }
-    })?;
-    for (p, n) in points.iter_mut().zip(normals) {
-        *p = add(*p, scale(n, sigma * rng.sample::<f64, _>(StandardNormal)));
-    }
-    Ok(())
-}
-
-/// Unit normal of the least-squares plane through `pts`.
-fn principal_normal(pts: impl Iterator<Item = [f32; 3]> + Clone) -> V3 {
-    let (n, sum) = pts.clone().fold((0.0, [0.0; 3]), |(n, s), q| {
-        (n + 1.0, [0, 1, 2].map(|a| s[a] + f64::from(q[a])))
-    });
-    let m = sum.map(|c| c / n);
-    let mut k = Sym3::default();
-    for q in pts {
-        let d = [0, 1, 2].map(|a| f64::from(q[a]) - m[a]);
-        k.xx += d[0] * d[0];
-        k.xy += d[0] * d[1];
-        k.xz += d[0] * d[2];
-        k.yy += d[1] * d[1];
-        k.yz += d[1] * d[2];
-        k.zz += d[2] * d[2];
-    }
-    k.eigen().smallest_vector
 }
 
 /// Appends `count` outliers (non-edge): copies of random points pushed 3..10 `spacing`
@@ -144,30 +85,6 @@ mod tests {
         let var = points.iter().map(|p| p[2] * p[2]).sum::<f64>() / points.len() as f64;
         // Standard error of a variance estimate from 20k samples: about 1%.
         assert!((var.sqrt() - 0.5).abs() < 0.01, "{}", var.sqrt());
-    }
-
-    #[test]
-    fn normal_noise_leaves_a_plane_along_its_normal() {
-        // A tilted plane z = 0.5 x: points move along (-0.5, 0, 1) / |.| only.
-        let clean: Vec<V3> = (0..2500)
-            .map(|i| {
-                let (x, y) = (f64::from(i % 50) * 0.1, f64::from(i / 50) * 0.1);
-                [x, y, 0.5 * x]
-            })
-            .collect();
-        let mut noisy = clean.clone();
-        add_normal_noise(&mut noisy, 0.05, &mut ChaCha8Rng::seed_from_u64(4)).unwrap();
-        let n = normalize([-0.5, 0.0, 1.0]);
-        let mut var = 0.0;
-        for (a, b) in clean.iter().zip(&noisy) {
-            let d = [0, 1, 2].map(|k| b[k] - a[k]);
-            let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-            let rest = [0, 1, 2].map(|k| d[k] - along * n[k]);
-            assert!(rest.iter().all(|r| r.abs() < 1e-6), "{rest:?}");
-            var += along * along;
-        }
-        let sd = (var / clean.len() as f64).sqrt();
-        assert!((sd - 0.05).abs() < 0.003, "{sd}");
     }
 
     #[test]
