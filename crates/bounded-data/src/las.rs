@@ -2,9 +2,10 @@
 //!
 //! The `las` crate reads and writes the header and the VLRs and compresses LAZ. Uncompressed
 //! point records are read and written here, in blocks of whole records at the fixed byte
-//! offsets of each field and decoded / encoded in parallel: several times faster than going
-//! through the crate's point buffers, and the point count is checked against the file size
-//! before anything is allocated for it.
+//! offsets of each field and decoded / encoded in parallel while the next block is read or
+//! the previous one written: several times faster than going through the crate's point
+//! buffers, and the point count is checked against the file size before anything is
+//! allocated for it.
 //!
 //! Reading decodes the point records column by column: coordinates as scaled integers
 //! (the scale and offset are kept in [`PositionType::Scaled`]), and every other field as a
@@ -35,7 +36,7 @@
 //! scale fine enough for the cloud's `f32` precision.
 
 use crate::DataError;
-use crate::records::{block_len, truncated};
+use crate::records::{BLOCK, block_len, pipelined, truncated};
 use crate::table::{Column, Endian, PointTable, PositionType, Property, ScalarType, TableView};
 use las::point::Format as LasFormat;
 use las::raw::header::LargeFile;
@@ -190,8 +191,18 @@ fn las_error(path: &Path, e: las::Error) -> DataError {
 
 /// Reads a LAS or LAZ file from `input`; `path` names it in errors.
 pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
+    input: R,
+    path: &Path,
+) -> Result<PointTable, DataError> {
+    read_in_blocks(input, path, BLOCK)
+}
+
+/// [`read_from`] with at most `max_block` records per block (tests set it small to cross
+/// block boundaries with a few points).
+fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     mut input: R,
     path: &Path,
+    max_block: usize,
 ) -> Result<PointTable, DataError> {
     let header = Header::new(&mut input).map_err(|e| las_error(path, e))?;
     let (names, slots, record_len) = record_fields(&header, path)?;
@@ -204,15 +215,20 @@ pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
             ),
         )
     })?;
-    let columns = if header.point_format().is_compressed {
-        read_laz(input, total, record_len, &slots, path)?
-    } else {
-        read_las(input, total, record_len, &slots, path)?
+    let blocks = Blocks {
+        total,
+        record_len,
+        block_len: block_len(record_len).min(max_block),
     };
-    into_table(header.transforms(), names, &slots, columns, path)
+    let decoded = if header.point_format().is_compressed {
+        read_laz(input, blocks, &slots, path)?
+    } else {
+        read_las(input, blocks, &slots, path)?
+    };
+    into_table(header.transforms(), names, &slots, decoded, path)
 }
 
-/// The names and slots of the fields of the records of `header` (x, y, z, the standard
+/// The names and slots of the fields of the records of `header` after x, y, z (the standard
 /// fields, the Extra Bytes), and the record length.
 fn record_fields(
     header: &Header,
@@ -228,16 +244,9 @@ fn record_fields(
             "LAS: inconsistent point record length",
         ));
     }
-    let xyz = ["x", "y", "z"].into_iter().enumerate().map(|(a, name)| {
-        let slot = Slot::Plain {
-            ty: ScalarType::I32,
-            at: 4 * a,
-        };
-        (name.to_string(), slot)
-    });
-    let standard = standard.into_iter().map(|(n, s)| (n.to_string(), s));
-    let (names, slots) = xyz
-        .chain(standard)
+    let (names, slots) = standard
+        .into_iter()
+        .map(|(n, s)| (n.to_string(), s))
         .chain(extra_fields(header, base_len, extra_len))
         .unzip();
     Ok((names, slots, record_len))
@@ -247,11 +256,13 @@ fn record_fields(
 /// checking that the file holds them: a corrupt count fails before anything is allocated.
 fn read_las(
     mut input: impl Read + Seek,
-    total: usize,
-    record_len: usize,
+    blocks: Blocks,
     slots: &[Slot],
     path: &Path,
-) -> Result<Vec<Column>, DataError> {
+) -> Result<Decoded, DataError> {
+    let Blocks {
+        total, record_len, ..
+    } = blocks;
     let io = |e| DataError::io(path, e);
     let start = input.stream_position().map_err(io)?;
     let end = input.seek(SeekFrom::End(0)).map_err(io)?;
@@ -265,7 +276,7 @@ fn read_las(
             ),
         ));
     }
-    decode_blocks(total, total, record_len, slots, |block, first| {
+    decode_blocks(blocks, total, slots, |block, first| {
         input.read_exact(block).map_err(|e| {
             let what = format!("LAS: point data ends within point {first} of {total}");
             truncated(path, what, e)
@@ -278,15 +289,17 @@ fn read_las(
 /// count ends in an error where the compressed data ends, not in a huge allocation.
 fn read_laz<R: Read + Seek + Send + Sync + 'static>(
     mut input: R,
-    total: usize,
-    record_len: usize,
+    blocks: Blocks,
     slots: &[Slot],
     path: &Path,
-) -> Result<Vec<Column>, DataError> {
+) -> Result<Decoded, DataError> {
+    let Blocks {
+        total, record_len, ..
+    } = blocks;
     input.rewind().map_err(|e| DataError::io(path, e))?;
     let mut reader = Reader::new(input).map_err(|e| las_error(path, e))?;
     let mut data = PointDataBuilder::new().for_header(reader.header()).build();
-    decode_blocks(total, 0, record_len, slots, |block, first| {
+    decode_blocks(blocks, 0, slots, |block, first| {
         let ends = |what: String| {
             let what = format!("LAS: point data ends within point {first} of {total}{what}");
             DataError::malformed(path, what)
@@ -303,38 +316,70 @@ fn read_laz<R: Read + Seek + Send + Sync + 'static>(
     })
 }
 
-/// Decodes `total` records of `record_len` bytes into one column per slot (each made with
-/// room for `capacity` values), block by block: `fill(block, first)` fills `block` with the
-/// records from `first` on, and the columns of each block are decoded in parallel.
-fn decode_blocks(
+/// How the point records of a file are split into blocks.
+#[derive(Debug, Clone, Copy)]
+struct Blocks {
+    /// The number of records.
     total: usize,
-    capacity: usize,
     record_len: usize,
+    /// Records per block.
+    block_len: usize,
+}
+
+/// Decoded point records: the coordinates as scaled integers, and one column per field.
+struct Decoded {
+    xyz: Vec<[i32; 3]>,
+    columns: Vec<Column>,
+}
+
+/// Decodes the records of `blocks` (x, y, z and one column per slot, each made with room for
+/// `capacity` values), block by block: `fill(block, first)` fills `block` with the records
+/// from `first` on while the previous block is decoded, its columns in parallel.
+fn decode_blocks(
+    blocks: Blocks,
+    capacity: usize,
     slots: &[Slot],
-    mut fill: impl FnMut(&mut [u8], usize) -> Result<(), DataError>,
-) -> Result<Vec<Column>, DataError> {
-    let mut columns: Vec<Column> = slots
+    fill: impl FnMut(&mut [u8], usize) -> Result<(), DataError>,
+) -> Result<Decoded, DataError> {
+    let columns = slots
         .iter()
         .map(|&s| {
             let optional = matches!(s, Slot::Bits { optional: true, .. });
             Column::with_capacity(s.scalar_type(), if optional { 0 } else { capacity })
         })
         .collect();
-    let block_len = block_len(record_len);
-    let mut buf = vec![0u8; record_len * total.min(block_len)];
-    let mut first = 0;
-    while first < total {
-        let n = (total - first).min(block_len);
-        let block = &mut buf[..n * record_len];
-        fill(block, first)?;
-        let block = &*block;
-        columns
-            .par_iter_mut()
-            .zip(slots)
-            .for_each(|(column, &slot)| decode(column, slot, block, record_len, first));
-        first += n;
-    }
-    Ok(columns)
+    let mut out = Decoded {
+        xyz: Vec::with_capacity(capacity),
+        columns,
+    };
+    let Blocks {
+        total,
+        record_len,
+        block_len,
+    } = blocks;
+    pipelined(total, block_len, record_len, fill, |block, first| {
+        let (xyz, columns) = (&mut out.xyz, &mut out.columns);
+        rayon::join(
+            || xyz.extend(block.chunks_exact(record_len).map(coordinates)),
+            || {
+                columns
+                    .par_iter_mut()
+                    .zip(slots)
+                    .for_each(|(column, &slot)| decode(column, slot, block, record_len, first))
+            },
+        );
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// The x, y, z scaled integers at the start of `record`.
+fn coordinates(record: &[u8]) -> [i32; 3] {
+    std::array::from_fn(|a| {
+        let mut v = [0u8; 4];
+        v.copy_from_slice(&record[4 * a..4 * a + 4]);
+        i32::from_le_bytes(v)
+    })
 }
 
 /// Appends the field `slot` of the records `bytes` (from record `first` on) to `column`; an
@@ -368,35 +413,24 @@ fn decode(column: &mut Column, slot: Slot, bytes: &[u8], stride: usize, first: u
     }
 }
 
-/// The table of the decoded `columns` (x, y, z first) of the fields `names`, `slots`; the
-/// coordinates are scaled by the transforms `t`, and optional flags no point sets (empty
-/// columns) are left out.
+/// The table of the `decoded` records with the fields `names`, `slots`; the coordinates are
+/// scaled by the transforms `t`, and optional flags no point sets (empty columns) are left out.
 fn into_table(
     t: &Vector<Transform>,
     names: Vec<String>,
     slots: &[Slot],
-    columns: Vec<Column>,
+    decoded: Decoded,
     path: &Path,
 ) -> Result<PointTable, DataError> {
-    let (Column::I32(x), Column::I32(y), Column::I32(z)) = (&columns[0], &columns[1], &columns[2])
-    else {
-        return Err(DataError::malformed(
-            path,
-            "LAS: coordinates not decoded as integers",
-        ));
-    };
-    let cloud = bounded_geom::PointCloud::from_iter_f64(x.len(), |i| {
-        [t.x.direct(x[i]), t.y.direct(y[i]), t.z.direct(z[i])]
-    })
-    .map_err(|source| DataError::Geom {
+    let cloud = cloud_of(decoded.xyz, t).map_err(|source| DataError::Geom {
         path: path.to_path_buf(),
         source,
     })?;
+    let columns = decoded.columns;
     let properties = names
         .into_iter()
         .zip(columns)
         .zip(slots)
-        .skip(3)
         .filter(|((_, values), slot)| {
             !(matches!(slot, Slot::Bits { optional: true, .. }) && values.is_empty())
         })
@@ -410,6 +444,43 @@ fn into_table(
         },
         properties,
     })
+}
+
+/// The cloud of the scaled integer coordinates `xyz`, exactly as
+/// [`PointCloud::from_iter_f64`](bounded_geom::PointCloud::from_iter_f64) builds it from the
+/// scaled coordinates, without its two passes over them and its second allocation: the
+/// bounding box comes from the integer extremes (scaling is monotonic) and the integers turn
+/// into offsets from its centre in place (`[i32; 3]` and `[f32; 3]` have the same layout, so
+/// the collect reuses the allocation).
+fn cloud_of(
+    xyz: Vec<[i32; 3]>,
+    t: &Vector<Transform>,
+) -> Result<bounded_geom::PointCloud, bounded_geom::GeomError> {
+    let axes = [t.x, t.y, t.z];
+    let absolute = move |p: [i32; 3]| std::array::from_fn::<f64, 3, _>(|a| axes[a].direct(p[a]));
+    let (lo, hi) = xyz.par_iter().map(|&p| (p, p)).reduce(
+        || ([i32::MAX; 3], [i32::MIN; 3]),
+        |(l0, h0), (l1, h1)| {
+            (
+                std::array::from_fn(|a| l0[a].min(l1[a])),
+                std::array::from_fn(|a| h0[a].max(h1[a])),
+            )
+        },
+    );
+    let (lo, hi) = (absolute(lo), absolute(hi));
+    let origin: [f64; 3] = std::array::from_fn(|a| 0.5 * (lo[a].min(hi[a]) + lo[a].max(hi[a])));
+    if xyz.is_empty() || !origin.iter().all(|o| o.is_finite()) {
+        // Let the general constructor name the empty cloud or the first non-finite point.
+        return bounded_geom::PointCloud::from_iter_f64(xyz.len(), |i| absolute(xyz[i]));
+    }
+    let points = xyz
+        .into_iter()
+        .map(|p| {
+            let p = absolute(p);
+            std::array::from_fn(|a| (p[a] - origin[a]) as f32)
+        })
+        .collect();
+    bounded_geom::PointCloud::from_local(origin, points)
 }
 
 /// Size of one Extra Bytes descriptor.
@@ -677,7 +748,7 @@ impl Conversion {
     fn apply(self, value: f64) -> f64 {
         match self {
             Conversion::None => value,
-            Conversion::ClassCode => f64::from(class_code(value)),
+            Conversion::ClassCode => f64::from(class_code(value as u8)),
             Conversion::Colour => value * 257.0,
             Conversion::ScanAngle => (value / 0.006).round(),
         }
@@ -702,21 +773,57 @@ impl<'a> Source<'a> {
         }
     }
 
-    /// Writes the values of points `first..` into the field `slot` of `records`.
+    /// Writes the values of points `first..` into the field `slot` of `records`: the
+    /// annotated outputs' class codes and 8-bit colours through typed loops, any other
+    /// conversion through `f64`.
     fn encode(self, slot: Slot, first: usize, records: &mut [u8], stride: usize) {
-        match slot {
-            Slot::Plain { ty, at }
-                if self.conversion == Conversion::None && ty == self.column.scalar_type() =>
-            {
-                self.column
-                    .encode_strided(first, records, stride, at, Endian::Little);
+        let n = records.len() / stride;
+        match (slot, self.conversion, self.column) {
+            (Slot::Plain { ty, at }, Conversion::None, column) if ty == column.scalar_type() => {
+                column.encode_strided(first, records, stride, at, Endian::Little);
             }
-            _ => self
-                .column
-                .for_each_f64(first, records.len() / stride, |k, v| {
-                    slot.put(self.conversion.apply(v), &mut records[k * stride..]);
-                }),
+            (
+                Slot::Plain {
+                    ty: ScalarType::U8,
+                    at,
+                },
+                Conversion::ClassCode,
+                Column::U8(v),
+            ) => {
+                put_each(&v[first..first + n], records, stride, at, |c| {
+                    [CLASS_CODES[usize::from(c)]]
+                });
+            }
+            (
+                Slot::Plain {
+                    ty: ScalarType::U16,
+                    at,
+                },
+                Conversion::Colour,
+                Column::U8(v),
+            ) => {
+                put_each(&v[first..first + n], records, stride, at, |c| {
+                    (u16::from(c) * 257).to_le_bytes()
+                });
+            }
+            _ => self.column.for_each_f64(first, n, |k, v| {
+                slot.put(self.conversion.apply(v), &mut records[k * stride..]);
+            }),
         }
+    }
+}
+
+/// Writes `f(value)` at byte `at` of each record of `stride` bytes of `records`, one record
+/// per value.
+fn put_each<T: Copy, const N: usize>(
+    values: &[T],
+    records: &mut [u8],
+    stride: usize,
+    at: usize,
+    f: impl Fn(T) -> [u8; N],
+) {
+    for (record, &v) in records.chunks_exact_mut(stride).zip(values) {
+        record[at..at + N].copy_from_slice(&f(v));
     }
 }
 
@@ -807,21 +914,17 @@ impl Stats {
 }
 
 /// Encodes the points of `view` block by block (each block in parallel tasks of [`TASK`]
-/// records), hands each block to `sink`, and returns the statistics of all records.
+/// records), hands each block to `sink` while the next one is encoded, and returns the
+/// statistics of all records.
 fn encode_blocks(
     view: &TableView<'_>,
     plan: &Plan<'_>,
     path: &Path,
-    mut sink: impl FnMut(&[u8]) -> Result<(), DataError>,
+    mut sink: impl FnMut(&[u8]) -> Result<(), DataError> + Send,
 ) -> Result<Stats, DataError> {
     let stride = plan.record_len;
-    let block_len = block_len(stride);
-    let mut buf = vec![0u8; stride * view.len().min(block_len)];
     let mut stats = Stats::default();
-    let mut first = 0;
-    while first < view.len() {
-        let n = (view.len() - first).min(block_len);
-        let block = &mut buf[..n * stride];
+    let encode = |block: &mut [u8], first: usize| {
         let block_stats = block
             .par_chunks_mut(TASK * stride)
             .enumerate()
@@ -829,15 +932,17 @@ fn encode_blocks(
             .try_reduce(Stats::default, |a, b| Ok(a.merge(b)))
             .map_err(|what| invalid(path, what))?;
         stats = stats.merge(block_stats);
-        sink(block)?;
-        first += n;
-    }
+        Ok(())
+    };
+    pipelined(view.len(), block_len(stride), stride, encode, |block, _| {
+        sink(block)
+    })?;
     Ok(stats)
 }
 
 /// Writes uncompressed LAS: header and VLRs, the records, then the header again with the
 /// counts and bounds of the records (same size, so it overwrites the first one exactly).
-fn write_las<W: Write + Seek>(
+fn write_las<W: Write + Seek + Send>(
     mut out: W,
     view: &TableView<'_>,
     plan: &Plan<'_>,
@@ -914,30 +1019,60 @@ fn encode_positions(
     for (k, record) in bytes.chunks_exact_mut(stride).enumerate() {
         let p = view.position(first + k);
         for a in 0..3 {
-            let steps = ((p[a] - axes[a].offset) / axes[a].scale).round();
-            if !(f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&steps) {
-                return Err(format!(
+            let steps = round_i32((p[a] - axes[a].offset) / axes[a].scale).ok_or_else(|| {
+                format!(
                     "point {} does not fit the LAS scale {} and offset {}",
                     first + k,
                     axes[a].scale,
                     axes[a].offset
-                ));
-            }
-            record[4 * a..4 * a + 4].copy_from_slice(&(steps as i32).to_le_bytes());
+                )
+            })?;
+            record[4 * a..4 * a + 4].copy_from_slice(&steps.to_le_bytes());
         }
     }
     Ok(())
 }
 
+/// `x.round()` (half away from zero) as an `i32`, or `None` when that is out of range or
+/// `x` is NaN. Truncates and corrects instead of calling `round`: without SSE4.1, x86-64 has
+/// no rounding instruction and `f64::round` is a libm call per coordinate.
+fn round_i32(x: f64) -> Option<i32> {
+    // Within this range the truncation and the remainder are exact (NaN is outside).
+    if x.is_nan() || x.abs() >= 4e9 {
+        return None;
+    }
+    let t = x as i64;
+    let rest = x - t as f64;
+    let rounded = if rest >= 0.5 {
+        t + 1
+    } else if rest <= -0.5 {
+        t - 1
+    } else {
+        t
+    };
+    i32::try_from(rounded).ok()
+}
+
 /// LAS Classification code of a BoundED class code; other values pass through.
-fn class_code(class: f64) -> u8 {
-    match class as u8 {
+const fn class_code(class: u8) -> u8 {
+    match class {
         0 => CODE_NON_EDGE,
         1 => CODE_SHARP,
         2 => CODE_BOUNDARY,
         other => other,
     }
 }
+
+/// [`class_code`] of every `u8`, for a table look-up per point.
+const CLASS_CODES: [u8; 256] = {
+    let mut codes = [0u8; 256];
+    let mut class = 0;
+    while class < 256 {
+        codes[class] = class_code(class as u8);
+        class += 1;
+    }
+    codes
+};
 
 /// The Extra Bytes VLR (user `LASF_Spec`, record 4) describing `extras` in order.
 fn extra_bytes_vlr(extras: &[(String, &Column)]) -> Vlr {
@@ -1258,6 +1393,80 @@ mod tests {
             nir: format.has_nir.then(|| 40_000 + u16::from(i)),
             extra_bytes,
             ..Default::default()
+        }
+    }
+
+    #[test]
+    fn fast_rounding_and_cloud_match_the_general_ones() {
+        let edges = [i32::MIN, i32::MAX].map(f64::from);
+        let mut xs = vec![
+            0.5,
+            -0.5,
+            1.5,
+            -2.5,
+            0.49999999999999994,
+            -7.25,
+            1e12,
+            f64::NAN,
+        ];
+        xs.extend(
+            edges
+                .iter()
+                .flat_map(|&e| [e, e - 0.5, e + 0.5, e - 0.49, e + 0.49]),
+        );
+        for x in xs {
+            let r = x.round();
+            let expected = (f64::from(i32::MIN)..=f64::from(i32::MAX))
+                .contains(&r)
+                .then_some(r as i32);
+            assert_eq!(round_i32(x), expected, "{x}");
+        }
+        let xyz = vec![[3, -7, i32::MAX], [-12, 5, 0], [1, 1, i32::MIN]];
+        for scale in [0.01, -0.003] {
+            let axis = Transform { scale, offset: 5e5 };
+            let t = Vector {
+                x: axis,
+                y: axis,
+                z: axis,
+            };
+            let general = PointCloud::from_iter_f64(3, |i| xyz[i].map(|v| axis.direct(v)));
+            assert_eq!(cloud_of(xyz.clone(), &t).unwrap(), general.unwrap());
+        }
+    }
+
+    #[test]
+    fn small_blocks_read_like_one_block_with_a_flag_first_set_in_a_later_block() {
+        for compressed in [false, true] {
+            let mut builder = Builder::from((1, 4));
+            builder.point_format = LasFormat::new(6).unwrap();
+            builder.point_format.is_compressed = compressed;
+            let mut writer =
+                Writer::new(Cursor::new(Vec::new()), builder.into_header().unwrap()).unwrap();
+            for i in 0..10u8 {
+                let point = las::Point {
+                    x: f64::from(i),
+                    y: -0.5 * f64::from(i),
+                    z: 1e3,
+                    is_synthetic: i == 7,
+                    return_number: 1,
+                    number_of_returns: 1,
+                    gps_time: Some(f64::from(i)),
+                    ..Default::default()
+                };
+                writer.write_point(point).unwrap();
+            }
+            let bytes = writer.into_inner().unwrap().into_inner();
+            let read = |max_block| {
+                read_in_blocks(Cursor::new(bytes.clone()), Path::new("t.las"), max_block).unwrap()
+            };
+            // Blocks of 3 records: the flag is first set in the third block.
+            let (small, whole) = (read(3), read(BLOCK));
+            let mut synthetic = vec![0u8; 10];
+            synthetic[7] = 1;
+            assert_eq!(small.property("synthetic"), Some(&Column::U8(synthetic)));
+            assert_eq!(small.property("withheld"), None);
+            assert_eq!(small, whole);
+            assert_eq!(small.cloud.position_f64(9), [9.0, -4.5, 1e3]);
         }
     }
 

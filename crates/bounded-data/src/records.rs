@@ -16,6 +16,47 @@ pub(crate) fn block_len(stride: usize) -> usize {
     ((4 << 20) / stride.max(1)).clamp(1, BLOCK)
 }
 
+/// Runs `produce(block, first)` then `consume(block, first)` on the blocks of `block_len`
+/// records of `stride` bytes that make up `total` records, in order, with two buffers: block
+/// `i` is consumed by a pool task while the calling thread produces block `i + 1`, so the
+/// file I/O on one side runs alongside the parallel decoding or encoding on the other
+/// instead of leaving the other cores idle. `produce` stays on the calling thread: a LAZ
+/// reader cannot move between threads. Stops at the first error (a `consume` error wins
+/// over a `produce` error of the same step).
+pub(crate) fn pipelined<E: Send>(
+    total: usize,
+    block_len: usize,
+    stride: usize,
+    mut produce: impl FnMut(&mut [u8], usize) -> Result<(), E>,
+    mut consume: impl FnMut(&[u8], usize) -> Result<(), E> + Send,
+) -> Result<(), E> {
+    let size = stride * total.min(block_len);
+    let (mut ready, mut next) = (vec![0u8; size], vec![0u8; size]);
+    // The block waiting in `ready`: its first record and its length in bytes.
+    let mut pending: Option<(usize, usize)> = None;
+    let mut first = 0;
+    while first < total || pending.is_some() {
+        let n = (total - first).min(block_len);
+        let mut consumed = Ok(());
+        let produced = rayon::in_place_scope(|scope| {
+            if let Some((at, len)) = pending {
+                let (consume, ready, consumed) = (&mut consume, &ready, &mut consumed);
+                scope.spawn(move |_| *consumed = consume(&ready[..len], at));
+            }
+            match n {
+                0 => Ok(()),
+                _ => produce(&mut next[..n * stride], first),
+            }
+        });
+        consumed?;
+        produced?;
+        std::mem::swap(&mut ready, &mut next);
+        pending = (n > 0).then_some((first, n * stride));
+        first += n;
+    }
+    Ok(())
+}
+
 /// Header lines longer than this are rejected (guards against reading a binary blob as
 /// one "line").
 pub(crate) const MAX_HEADER_LINE: u64 = 64 * 1024;
