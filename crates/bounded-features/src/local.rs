@@ -175,25 +175,10 @@ fn frame(pts: &[[f64; 3]], moments: &Moments, near_centroid: &mut Vec<u64>) -> F
     let raw = if half == 0 {
         [0.0, 0.0, 1.0]
     } else {
-        // Non-negative f64 bits order like the values; the rank replaces the lowest
-        // mantissa bits (a relative 2^-45 at k = 128), so one u64 is the whole key and
-        // distances equal to that precision tie by rank.
-        let rank_bits = pts.len().next_power_of_two() as u64 - 1;
-        near_centroid.clear();
-        near_centroid.extend(
-            pts.iter()
-                .zip(0u64..)
-                .map(|(q, j)| dist2(*q, m).to_bits() & !rank_bits | j),
-        );
-        near_centroid.select_nth_unstable(half - 1);
-        Moments::of(
-            near_centroid[..half]
-                .iter()
-                .map(|&key| pts[(key & rank_bits) as usize]),
-        )
-        .covariance()
-        .eigen()
-        .smallest_vector
+        nearest_half(pts, m, near_centroid)
+            .covariance()
+            .eigen()
+            .smallest_vector
     };
     Frame {
         mean: m,
@@ -201,6 +186,28 @@ fn frame(pts: &[[f64; 3]], moments: &Moments, near_centroid: &mut Vec<u64>) -> F
         normal: orient(raw, m.map(|c| -c)),
         variances,
     }
+}
+
+/// Moments of the `floor(k/2)` of the `k` points `pts` closest to `m`, ties by rank.
+///
+/// Non-negative f64 bits order like the values; the rank replaces the lowest mantissa
+/// bits (a relative 2^-45 at k = 128), so one u64 is the whole key and distances
+/// equal to that precision tie by rank.
+fn nearest_half(pts: &[[f64; 3]], m: [f64; 3], keys: &mut Vec<u64>) -> Moments {
+    let rank_bits = pts.len().next_power_of_two() as u64 - 1;
+    keys.clear();
+    keys.extend(
+        pts.iter()
+            .zip(0u64..)
+            .map(|(q, j)| dist2(*q, m).to_bits() & !rank_bits | j),
+    );
+    let half = pts.len() / 2;
+    keys.select_nth_unstable(half - 1);
+    Moments::of(
+        keys[..half]
+            .iter()
+            .map(|&key| pts[(key & rank_bits) as usize]),
+    )
 }
 
 /// Orients the unit normal `n` so that `<s, n> >= 0`, where `s = p_i - m` (the query
@@ -260,6 +267,24 @@ fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nearest_half_breaks_ties_by_rank() {
+        // A 7 x 7 integer grid (many exactly equal distances to the centre), in a
+        // scrambled order, and an odd count: brute force on (distance, rank) pairs.
+        let pts: Vec<[f64; 3]> = (0..49)
+            .map(|i| (i * 19) % 49)
+            .map(|i| [(i % 7) as f64, (i / 7) as f64, 0.5 * (i % 3) as f64])
+            .collect();
+        for (len, m) in [(49, [3.0, 3.0, 0.5]), (48, [0.0; 3]), (3, [1.0, 0.0, 0.0])] {
+            let pts = &pts[..len];
+            let mut want: Vec<(f64, usize)> = (0..len).map(|j| (dist2(pts[j], m), j)).collect();
+            want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let want = Moments::of(want[..len / 2].iter().map(|&(_, j)| pts[j]));
+            let got = nearest_half(pts, m, &mut Vec::new());
+            assert_eq!((got.n, got.sum, got.outer), (want.n, want.sum, want.outer));
+        }
+    }
 
     #[test]
     fn orientation_ignores_the_solvers_sign() {
