@@ -56,10 +56,23 @@ impl Moments {
         o.zz += q[2] * q[2];
     }
 
+    /// The moments of `pts`.
+    ///
+    /// Never inlined: inside the large `point_features` the accumulators were kept on
+    /// the stack, putting a store-to-load round trip into every addition's chain.
+    #[inline(never)]
     fn of(pts: impl Iterator<Item = [f64; 3]>) -> Self {
         let mut m = Self::default();
         pts.for_each(|q| m.add(q));
         m
+    }
+
+    /// Adds `pts`, in order (not inlined, like [`of`](Self::of)).
+    #[inline(never)]
+    fn extend(&mut self, pts: &[[f64; 3]]) {
+        let mut m = *self;
+        pts.iter().for_each(|&q| m.add(q));
+        *self = m;
     }
 
     /// The moments of the points in `self` but not in `part`.
@@ -129,7 +142,7 @@ pub(crate) fn point_features(
     scratch.prefix.clear();
     let mut running = Moments::default();
     for &k in config.scales.iter().rev() {
-        local[running.n..k].iter().for_each(|&q| running.add(q));
+        running.extend(&local[running.n..k]);
         scratch.prefix.push(running);
     }
     let mut largest: Option<(Moments, Frame)> = None;
