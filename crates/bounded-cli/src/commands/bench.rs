@@ -59,8 +59,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             seed: 1,
         }
     } else {
+        // SPEC.md: 8000 iterations for ABC-size training sets (ours holds 5.8M points).
         Schedule {
-            iterations: 3000,
+            iterations: 8000,
             runs: 5,
             seed: 1,
         }
@@ -72,7 +73,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     eprintln!(
         "bench: {} mode, expected duration about {} minutes on 2 cores (full mode peaks near 12 GB of memory)",
         if args.quick { "quick" } else { "full" },
-        if args.quick { 4 } else { 12 }
+        if args.quick { 4 } else { 25 }
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
