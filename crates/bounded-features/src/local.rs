@@ -54,13 +54,7 @@ impl Moments {
         for (s, c) in self.sum.iter_mut().zip(q) {
             *s += c;
         }
-        let o = &mut self.outer;
-        o.xx += q[0] * q[0];
-        o.xy += q[0] * q[1];
-        o.xz += q[0] * q[2];
-        o.yy += q[1] * q[1];
-        o.yz += q[1] * q[2];
-        o.zz += q[2] * q[2];
+        self.outer.add_outer(q);
     }
 
     /// The moments of `pts`.

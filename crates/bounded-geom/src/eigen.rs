@@ -43,6 +43,17 @@ pub struct Eigen3 {
 const REPEATED: f64 = 1e-10;
 
 impl Sym3 {
+    /// Adds the outer product `q q^T`: the step of a covariance or scatter-matrix sum.
+    #[inline]
+    pub fn add_outer(&mut self, q: [f64; 3]) {
+        self.xx += q[0] * q[0];
+        self.xy += q[0] * q[1];
+        self.xz += q[0] * q[2];
+        self.yy += q[1] * q[1];
+        self.yz += q[1] * q[2];
+        self.zz += q[2] * q[2];
+    }
+
     /// The matrix' rows.
     fn rows(&self) -> [[f64; 3]; 3] {
         [
@@ -301,13 +312,8 @@ mod tests {
                 .map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]])
                 .collect();
             let mut m = Sym3::default();
-            for p in &pts {
-                m.xx += p[0] * p[0];
-                m.xy += p[0] * p[1];
-                m.xz += p[0] * p[2];
-                m.yy += p[1] * p[1];
-                m.yz += p[1] * p[2];
-                m.zz += p[2] * p[2];
+            for &p in &pts {
+                m.add_outer(p);
             }
             let e = m.eigen();
             let [a, b, c] = e.values;
