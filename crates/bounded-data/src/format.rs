@@ -33,6 +33,7 @@
 use crate::table::{Column, PointTable, PositionType, Property, TableView};
 use crate::{DataError, LabelledCloud};
 use bounded_geom::Class;
+use rayon::prelude::*;
 use std::fs::File;
 use std::io::{BufReader, BufWriter};
 use std::path::Path;
@@ -175,27 +176,46 @@ fn class_property(classes: &[Class]) -> Property {
     )
 }
 
+/// The annotation columns, filled in one parallel pass: at 10M points they are 160 MB of
+/// fresh pages, whose faults and stores would otherwise be a fifth of a LAS write.
 fn annotation(classes: &[Class], probabilities: &[[f32; 3]]) -> Vec<Property> {
-    let probability = |name: &str, k: usize| {
-        Property::new(
-            name,
-            Column::F32(probabilities.iter().map(|p| p[k]).collect()),
-        )
-    };
-    let colour = |name: &str, k: usize| {
-        Property::new(
-            name,
-            Column::U8(classes.iter().map(|&c| class_colour(c)[k]).collect()),
-        )
-    };
+    let n = classes.len();
+    let mut class = vec![0u8; n];
+    let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0f32; n]);
+    let mut rgb: [Vec<u8>; 3] = std::array::from_fn(|_| vec![0u8; n]);
+    let [p0, p1, p2] = &mut p;
+    let [r, g, b] = &mut rgb;
+    const CHUNK: usize = 1 << 14;
+    (
+        class.par_chunks_mut(CHUNK),
+        p0.par_chunks_mut(CHUNK),
+        p1.par_chunks_mut(CHUNK),
+        p2.par_chunks_mut(CHUNK),
+        (
+            r.par_chunks_mut(CHUNK),
+            g.par_chunks_mut(CHUNK),
+            b.par_chunks_mut(CHUNK),
+        ),
+        (classes.par_chunks(CHUNK), probabilities.par_chunks(CHUNK)),
+    )
+        .into_par_iter()
+        .for_each(|(class, p0, p1, p2, (r, g, b), (classes, probabilities))| {
+            for k in 0..classes.len() {
+                let [red, green, blue] = class_colour(classes[k]);
+                [class[k], r[k], g[k], b[k]] = [classes[k] as u8, red, green, blue];
+                [p0[k], p1[k], p2[k]] = probabilities[k];
+            }
+        });
+    let [p0, p1, p2] = p.map(Column::F32);
+    let [r, g, b] = rgb.map(Column::U8);
     vec![
-        class_property(classes),
-        probability("p_nonedge", 0),
-        probability("p_sharp", 1),
-        probability("p_boundary", 2),
-        colour("red", 0),
-        colour("green", 1),
-        colour("blue", 2),
+        Property::new("class", Column::U8(class)),
+        Property::new("p_nonedge", p0),
+        Property::new("p_sharp", p1),
+        Property::new("p_boundary", p2),
+        Property::new("red", r),
+        Property::new("green", g),
+        Property::new("blue", b),
     ]
 }
 
@@ -268,6 +288,29 @@ mod tests {
             "{e}"
         );
         assert!(Format::from_path(Path::new("noext")).is_err());
+    }
+
+    #[test]
+    fn annotation_columns_hold_each_point_across_parallel_chunks() {
+        let n = 40_000;
+        let classes: Vec<Class> = (0..n).map(|i| Class::ALL[i * 7 % 3]).collect();
+        let probabilities: Vec<[f32; 3]> = (0..n).map(|i| [i as f32, 0.5, -(i as f32)]).collect();
+        let columns = annotation(&classes, &probabilities);
+        let value = |name: &str, i: usize| {
+            let p = columns.iter().find(|p| p.name == name).unwrap();
+            assert_eq!(p.values.len(), n, "{name}");
+            p.values.get_f64(i)
+        };
+        for i in [0, 1, 16_383, 16_384, 16_385, 32_768, n - 1] {
+            let colour = class_colour(classes[i]).map(f64::from);
+            assert_eq!(value("class", i), classes[i] as u8 as f64, "{i}");
+            assert_eq!(
+                [value("red", i), value("green", i), value("blue", i)],
+                colour
+            );
+            let p = ["p_nonedge", "p_sharp", "p_boundary"].map(|name| value(name, i) as f32);
+            assert_eq!(p, probabilities[i], "{i}");
+        }
     }
 
     #[test]
