@@ -204,6 +204,7 @@ fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     path: &Path,
     max_block: usize,
 ) -> Result<PointTable, DataError> {
+    check_evlr_lengths(&mut input, path)?;
     let header = Header::new(&mut input).map_err(|e| las_error(path, e))?;
     let (names, slots, record_len) = record_fields(&header, path)?;
     let total = usize::try_from(header.number_of_points()).map_err(|_| {
@@ -226,6 +227,45 @@ fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
         read_las(input, blocks, &slots, path)?
     };
     into_table(header.transforms(), names, &slots, decoded, path)
+}
+
+/// Checks that every extended VLR fits in the file, then rewinds `input`: the las crate
+/// allocates an EVLR's stated length (up to 2^64 bytes) before reading it, so a corrupt
+/// length must fail here, not exhaust memory (found by fuzzing).
+fn check_evlr_lengths(mut input: impl Read + Seek, path: &Path) -> Result<(), DataError> {
+    let io = |e| DataError::io(path, e);
+    let raw = las::raw::Header::read_from(&mut input).map_err(|e| las_error(path, e))?;
+    let end = input.seek(SeekFrom::End(0)).map_err(io)?;
+    if let Some(evlr) = raw.evlr.filter(|e| e.number_of_evlrs > 0) {
+        let mut at = evlr.start_of_first_evlr;
+        for k in 0..evlr.number_of_evlrs {
+            // An EVLR header: reserved (2), user id (16), record id (2), length (8),
+            // description (32).
+            let mut head = [0u8; 60];
+            input.seek(SeekFrom::Start(at)).map_err(io)?;
+            input.read_exact(&mut head).map_err(|e| {
+                truncated(
+                    path,
+                    format!("LAS: extended VLR {k} starts past the end"),
+                    e,
+                )
+            })?;
+            let length = u64::from_le_bytes(head[20..28].try_into().expect("8 bytes"));
+            at = at
+                .checked_add(60)
+                .and_then(|a| a.checked_add(length))
+                .filter(|&a| a <= end)
+                .ok_or_else(|| {
+                    DataError::malformed(
+                        path,
+                        format!(
+                            "LAS: extended VLR {k} claims {length} bytes, past the end of the {end}-byte file"
+                        ),
+                    )
+                })?;
+        }
+    }
+    input.rewind().map_err(io)
 }
 
 /// The names and slots of the fields of the records of `header` after x, y, z (the standard
@@ -1259,6 +1299,23 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(msg.starts_with("bad.las: LAS: "), "{msg}");
+    }
+
+    #[test]
+    fn an_extended_vlr_longer_than_the_file_fails_before_allocating() {
+        let mut bytes = write_bytes(&sample(), false);
+        let start = bytes.len() as u64;
+        // LAS 1.4 header: start of the first EVLR (u64) at 235, their number (u32) at 243.
+        bytes[235..243].copy_from_slice(&start.to_le_bytes());
+        bytes[243..247].copy_from_slice(&1u32.to_le_bytes());
+        let mut evlr = [0u8; 60];
+        evlr[20..28].copy_from_slice(&0xFFFF_FF00u64.to_le_bytes());
+        bytes.extend_from_slice(&evlr);
+        let msg = read_from(Cursor::new(bytes), Path::new("evlr.las"))
+            .unwrap_err()
+            .to_string();
+        let expected = "evlr.las: LAS: extended VLR 0 claims 4294967040 bytes, past the end";
+        assert!(msg.starts_with(expected), "{msg}");
     }
 
     #[test]
