@@ -654,6 +654,8 @@ struct Plan<'a> {
     fields: Vec<(Slot, Source<'a>)>,
     /// The return number field, counted in the header.
     return_number: Slot,
+    /// Whether a property fills the return numbers (otherwise all are 1).
+    returns_filled: bool,
 }
 
 impl<'a> Plan<'a> {
@@ -712,6 +714,7 @@ impl<'a> Plan<'a> {
             template,
             fields,
             return_number,
+            returns_filled: Source::of(view, "return_number").is_some(),
         })
     }
 
@@ -723,14 +726,38 @@ impl<'a> Plan<'a> {
         records: &mut [u8],
     ) -> Result<Stats, String> {
         let stride = self.record_len;
-        for record in records.chunks_exact_mut(stride) {
-            record.copy_from_slice(&self.template);
+        // The template into the first record, then doubling copies: one memcpy per
+        // record would be a call per 48 bytes.
+        records[..stride].copy_from_slice(&self.template);
+        let mut filled = stride;
+        while filled < records.len() {
+            let len = filled.min(records.len() - filled);
+            records.copy_within(..len, filled);
+            filled += len;
         }
-        encode_positions(view, first, records, stride, self.header.transforms())?;
+        let (min, max) = encode_positions(view, first, records, stride, self.header.transforms())?;
         for (slot, source) in &self.fields {
             source.encode(*slot, first, records, stride);
         }
-        Ok(Stats::of(records, stride, self.return_number))
+        let count = (records.len() / stride) as u64;
+        let mut by_return = [0; 16];
+        match self.return_number {
+            // The template's return number (1) unless a property fills the field.
+            Slot::Bits {
+                at, shift, width, ..
+            } if self.returns_filled => {
+                for record in records.chunks_exact(stride) {
+                    by_return[usize::from(bits_of(record[at], shift, width))] += 1;
+                }
+            }
+            _ => by_return[1] = count,
+        }
+        Ok(Stats {
+            count,
+            min,
+            max,
+            by_return,
+        })
     }
 }
 
@@ -889,28 +916,6 @@ impl Default for Stats {
 }
 
 impl Stats {
-    /// The statistics of the encoded `records`.
-    fn of(records: &[u8], stride: usize, return_number: Slot) -> Self {
-        let mut s = Stats::default();
-        for record in records.chunks_exact(stride) {
-            for a in 0..3 {
-                let mut v = [0u8; 4];
-                v.copy_from_slice(&record[4 * a..4 * a + 4]);
-                let v = i32::from_le_bytes(v);
-                s.min[a] = s.min[a].min(v);
-                s.max[a] = s.max[a].max(v);
-            }
-            if let Slot::Bits {
-                at, shift, width, ..
-            } = return_number
-            {
-                s.by_return[usize::from(bits_of(record[at], shift, width))] += 1;
-            }
-            s.count += 1;
-        }
-        s
-    }
-
     fn merge(mut self, other: Stats) -> Self {
         self.count += other.count;
         for a in 0..3 {
@@ -1048,29 +1053,46 @@ fn transforms(view: &TableView<'_>) -> Vector<Transform> {
     }
 }
 
+/// Writes the scaled integer coordinates of points `first..` into `records` and returns
+/// their smallest and largest value per axis. The divisions run over runs of one axis (they
+/// vectorise); the values match `((origin + x - offset) / scale).round()` exactly.
 fn encode_positions(
     view: &TableView<'_>,
     first: usize,
-    bytes: &mut [u8],
+    records: &mut [u8],
     stride: usize,
     t: &Vector<Transform>,
-) -> Result<(), String> {
+) -> Result<([i32; 3], [i32; 3]), String> {
+    const RUN: usize = 256;
     let axes = [t.x, t.y, t.z];
-    for (k, record) in bytes.chunks_exact_mut(stride).enumerate() {
-        let p = view.position(first + k);
+    let origin = view.cloud.origin();
+    let n = records.len() / stride;
+    let points = &view.cloud.points()[first..first + n];
+    let (mut min, mut max) = ([i32::MAX; 3], [i32::MIN; 3]);
+    let mut steps = [0f64; RUN];
+    for (run, (points, records)) in points
+        .chunks(RUN)
+        .zip(records.chunks_mut(RUN * stride))
+        .enumerate()
+    {
         for a in 0..3 {
-            let steps = round_i32((p[a] - axes[a].offset) / axes[a].scale).ok_or_else(|| {
-                format!(
-                    "point {} does not fit the LAS scale {} and offset {}",
-                    first + k,
-                    axes[a].scale,
-                    axes[a].offset
-                )
-            })?;
-            record[4 * a..4 * a + 4].copy_from_slice(&steps.to_le_bytes());
+            let (o, Transform { scale, offset }) = (origin[a], axes[a]);
+            for (s, p) in steps.iter_mut().zip(points) {
+                *s = (o + f64::from(p[a]) - offset) / scale;
+            }
+            for (k, (record, &x)) in records.chunks_exact_mut(stride).zip(&steps).enumerate() {
+                let v = round_i32(x).ok_or_else(|| {
+                    format!(
+                        "point {} does not fit the LAS scale {scale} and offset {offset}",
+                        first + run * RUN + k
+                    )
+                })?;
+                (min[a], max[a]) = (min[a].min(v), max[a].max(v));
+                record[4 * a..4 * a + 4].copy_from_slice(&v.to_le_bytes());
+            }
         }
     }
-    Ok(())
+    Ok((min, max))
 }
 
 /// `x.round()` (half away from zero) as an `i32`, or `None` when that is out of range or
@@ -1560,8 +1582,13 @@ mod tests {
         t.set_property(Property::new("scanner_channel", column([3, 0, 1])));
         t.set_property(Property::new("gps_time", Column::F64(vec![1.5, -2.0, 1e9])));
         let extras = [("p_sharp", ScalarType::F32), ("offset", ScalarType::I16)];
-        for format in [6, 7, 8] {
+        // Format 6 also without return numbers: the header counts them all as return 1.
+        for (format, returns) in [(6, true), (6, false), (7, true), (8, true)] {
             let mut t = t.clone();
+            if !returns {
+                t.properties
+                    .retain(|p| !p.name.ends_with("returns") && p.name != "return_number");
+            }
             if format == 6 {
                 t.properties
                     .retain(|p| !["red", "green", "blue"].contains(&p.name.as_str()));
@@ -1574,6 +1601,8 @@ mod tests {
             let (mut fast, mut laz) = (header(&las), header(&write_bytes(&t, true)));
             assert_eq!(fast.header().point_format().to_u8().unwrap(), format);
             assert_eq!(fast.header().number_of_points(), 3);
+            let first_returns = fast.header().number_of_points_by_return(1);
+            assert_eq!(first_returns, Some(if returns { 1 } else { 3 }));
             for r in 1..=15 {
                 let counts = [fast.header(), laz.header()].map(|h| h.number_of_points_by_return(r));
                 assert_eq!(counts[0], counts[1], "return {r}");
