@@ -1,6 +1,6 @@
 //! Fast inference without Burn: a hand-written forward pass over the exported weights.
 //!
-//! Points are processed in blocks of [`LANES`]: activations are stored `[unit][lane]`, so every
+//! Points are processed in blocks of 16 lanes: activations are stored `[unit][lane]`, so every
 //! layer is a loop of scalar-weight times lane-vector multiply-adds that the compiler turns
 //! into SIMD, and the pairwise fusion of adjacent nodes reads contiguous rows (no copies for
 //! the concatenation). Blocks are spread over rayon's threads. Evaluation mode: no dropout.
