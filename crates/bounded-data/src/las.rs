@@ -250,7 +250,9 @@ fn check_evlr_lengths(mut input: impl Read + Seek, path: &Path) -> Result<(), Da
                     e,
                 )
             })?;
-            let length = u64::from_le_bytes(head[20..28].try_into().expect("8 bytes"));
+            let mut length = [0u8; 8];
+            length.copy_from_slice(&head[20..28]);
+            let length = u64::from_le_bytes(length);
             at = at
                 .checked_add(60)
                 .and_then(|a| a.checked_add(length))
@@ -652,10 +654,9 @@ struct Plan<'a> {
     template: Vec<u8>,
     /// The fields after x, y, z that a property fills, with that property.
     fields: Vec<(Slot, Source<'a>)>,
-    /// The return number field, counted in the header.
-    return_number: Slot,
-    /// Whether a property fills the return numbers (otherwise all are 1).
-    returns_filled: bool,
+    /// The return number field when a property fills it, counted per record for the header;
+    /// `None` when every record keeps the template's return 1.
+    counted_returns: Option<Slot>,
 }
 
 impl<'a> Plan<'a> {
@@ -713,8 +714,7 @@ impl<'a> Plan<'a> {
             record_len: template.len(),
             template,
             fields,
-            return_number,
-            returns_filled: Source::of(view, "return_number").is_some(),
+            counted_returns: Source::of(view, "return_number").map(|_| return_number),
         })
     }
 
@@ -741,16 +741,16 @@ impl<'a> Plan<'a> {
         }
         let count = (records.len() / stride) as u64;
         let mut by_return = [0; 16];
-        match self.return_number {
-            // The template's return number (1) unless a property fills the field.
-            Slot::Bits {
+        match self.counted_returns {
+            Some(Slot::Bits {
                 at, shift, width, ..
-            } if self.returns_filled => {
+            }) => {
                 for record in records.chunks_exact(stride) {
                     by_return[usize::from(bits_of(record[at], shift, width))] += 1;
                 }
             }
-            _ => by_return[1] = count,
+            Some(Slot::Plain { .. }) => unreachable!("return numbers are bit fields"),
+            None => by_return[1] = count,
         }
         Ok(Stats {
             count,
