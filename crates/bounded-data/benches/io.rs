@@ -53,8 +53,8 @@ fn io(c: &mut Criterion) {
                 BatchSize::PerIteration,
             )
         });
-        // Replacing an existing file: on ext4 the rename over it also starts the writeback
-        // of the new file (auto_da_alloc) and frees the old one's pages, in this call.
+        // Replacing an existing file (an exchange, then deleting the old one: see
+        // `write_atomic`), as when `detect` reruns with the same output.
         group.bench_function(format!("replace_{ext}"), |b| b.iter(write));
         group.bench_function(format!("read_{ext}"), |b| {
             b.iter(|| read(&path).expect("read").len())
