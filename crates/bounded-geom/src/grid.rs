@@ -7,12 +7,13 @@
 //! exact. Otherwise the box grows, and as a last resort (isolated points) cells are
 //! visited in order of distance.
 //!
-//! Within a cell, each query first filters the shared candidates with the triangle
-//! bound `d_k(p) <= d_k(prev) + |p - prev|` from the previous query (consecutive
-//! queries are Morton neighbours, so it keeps ~1.5 k candidates and lets whole cells
-//! be skipped). Exactness never depends on that bound: whenever `k` candidates lie
-//! below a limit that is inside the box, they are the true `k` nearest; with fewer
-//! (a bound too tight through rounding) the query falls back to the box's own limit.
+//! Within a cell, each query first filters the shared candidates with a limit taken
+//! from the previous query (consecutive queries are Morton neighbours): its `k`-th
+//! distance widened by 6%, which keeps ~1.12 k candidates and lets whole cells be
+//! skipped; when that keeps fewer than `k` (rare on a surface), the triangle
+//! bound `d_k(p) <= d_k(prev) + |p - prev|` (~1.5 k candidates); then the box's own
+//! limit. Exactness never depends on these limits: whenever `k` candidates lie below a
+//! limit that is inside the box, they are the true `k` nearest.
 
 use std::ops::Range;
 
@@ -191,10 +192,14 @@ impl Grid {
             let p = s.points[pos];
             let q = s.order[pos];
             let exact = self.limit(s, c, RING, p);
-            let bound = prev.map_or(f32::INFINITY, |(x, kth)| reach(kth, x, p));
+            let (guess, bound) = prev.map_or((f32::INFINITY, f32::INFINITY), |(x, kth)| {
+                (guess(kth), reach(kth, x, p))
+            });
             let sel = &mut scratch.select;
-            if (bound < exact && scratch.shared.best(p, q, bound, sel, out))
-                || scratch.shared.best(p, q, exact, sel, out)
+            let shared = &scratch.shared;
+            if (guess < exact && shared.best(p, q, guess, sel, out))
+                || (guess < bound && bound < exact && shared.best(p, q, bound, sel, out))
+                || shared.best(p, q, exact, sel, out)
             {
                 prev = Some((p, key_distance(sel.sorted(k)[k - 1])));
                 continue;
@@ -298,6 +303,14 @@ fn box_distance2(p: [f32; 3], cell: &CellBox) -> f64 {
             d * d
         })
         .sum()
+}
+
+/// First limit tried for a query: the previous query's `k`-th squared distance `kth`,
+/// widened by 6% in distance. Consecutive queries are about a point spacing apart, so
+/// the `k`-th distance barely changes; measured on a 1M-point surface cloud, 97% of the
+/// queries keep `k` or more (1.12 k on average, vs 1.5 k for [`reach`]'s bound).
+fn guess(kth: f32) -> f32 {
+    (f64::from(kth) * 1.06 * 1.06) as f32
 }
 
 /// Squared distance within which the `k` neighbours of a point at `prev`, the
