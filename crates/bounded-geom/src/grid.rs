@@ -60,6 +60,9 @@ pub(crate) struct Scratch {
     own: Candidates,
     select: Selection,
     by_distance: Vec<(f64, u32)>,
+    /// The last query answered from a shared candidate set, and its `k`-th squared
+    /// distance: where the next query's limits come from, also across cells.
+    prev: Option<([f32; 3], f32)>,
 }
 
 /// The sorted points a grid indexes.
@@ -185,34 +188,30 @@ impl Grid {
         let k = rows.len() / queries.len();
         let c = self.coords(s, cell);
         self.gather(s, c, RING, &mut scratch.shared);
-        // The previous query's k neighbours lie within d_k(prev) + |p - prev| of this
-        // one, so that bounds d_k(p): candidates beyond it are dropped before selection.
-        let mut prev: Option<([f32; 3], f32)> = None;
         for (pos, out) in queries.zip(rows.chunks_exact_mut(k)) {
             let p = s.points[pos];
             let q = s.order[pos];
             let exact = self.limit(s, c, RING, p);
-            let (guess, bound) = prev.map_or((f32::INFINITY, f32::INFINITY), |(x, kth)| {
-                (guess(kth), reach(kth, x, p))
-            });
+            let (guess, bound) = scratch
+                .prev
+                .map_or((f32::INFINITY, f32::INFINITY), |(x, kth)| {
+                    (guess(kth), reach(kth, x, p))
+                });
             let sel = &mut scratch.select;
             let shared = &scratch.shared;
-            if (guess < exact && shared.best(p, q, guess, sel, out))
+            let answered = (guess < exact && shared.best(p, q, guess, sel, out))
                 || (guess < bound && bound < exact && shared.best(p, q, bound, sel, out))
                 || shared.best(p, q, exact, sel, out)
-            {
-                prev = Some((p, key_distance(sel.sorted(k)[k - 1])));
-                continue;
-            }
-            prev = None;
-            let solved = (RING + 1..=MAX_RING).any(|r| {
-                self.gather(s, c, r, &mut scratch.own);
-                let lim = self.limit(s, c, r, p);
-                scratch.own.best(p, q, lim, &mut scratch.select, out)
-            });
-            if !solved {
+                || (RING + 1..=MAX_RING).any(|r| {
+                    self.gather(s, c, r, &mut scratch.own);
+                    let lim = self.limit(s, c, r, p);
+                    scratch.own.best(p, q, lim, &mut scratch.select, out)
+                });
+            if !answered {
                 self.by_distance(s, p, q, scratch, out);
             }
+            // Every path leaves this query's neighbours, sorted, in the selection.
+            scratch.prev = Some((p, key_distance(scratch.select.sorted(k)[k - 1])));
         }
     }
 
