@@ -60,8 +60,8 @@ pub(crate) struct Scratch {
     own: Candidates,
     select: Selection,
     by_distance: Vec<(f64, u32)>,
-    /// The last query answered from a shared candidate set, and its `k`-th squared
-    /// distance: where the next query's limits come from, also across cells.
+    /// The last query of this thread and its `k`-th squared distance: where the next
+    /// query's limits come from, also across cells.
     prev: Option<([f32; 3], f32)>,
 }
 
