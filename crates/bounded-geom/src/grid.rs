@@ -4,8 +4,8 @@
 //! a contiguous run of the sorted points. All queries of a cell share one candidate set
 //! (the cells within `RING` of it); a query is answered from it when its `k` best
 //! candidates lie closer than the candidate box's nearest face, which makes the answer
-//! exact. Otherwise the box grows, and as a last resort (isolated points) cells are
-//! visited in order of distance.
+//! exact. Otherwise (points in sparse parts) cells are visited in order of distance,
+//! found best-first in the octree above them.
 //!
 //! Within a cell, each query first filters the shared candidates with a limit taken
 //! from the previous query (consecutive queries are Morton neighbours): its `k`-th
@@ -15,6 +15,8 @@
 //! limit. Exactness never depends on these limits: whenever `k` candidates lie below a
 //! limit that is inside the box, they are the true `k` nearest.
 
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 use std::ops::Range;
 
 use crate::morton::{BITS, Quantiser, code};
@@ -22,8 +24,6 @@ use crate::select::{Selection, key_distance, key_index};
 
 /// Cells on each side of the query cell in the shared candidate box.
 const RING: i64 = 2;
-/// Largest box (cells on each side) tried before visiting cells by distance.
-const MAX_RING: i64 = 4;
 /// Relative safety margin on squared distances against rounding of faces and distances.
 const MARGIN: f64 = 1e-4;
 
@@ -38,20 +38,26 @@ pub(crate) struct Grid {
     max_cell: i64,
 }
 
-/// Candidate points in structure-of-arrays form, with original indices, grouped by
-/// cell so that a query can skip whole cells beyond its distance limit.
+/// Candidate points in structure-of-arrays form, with original indices, grouped in
+/// pieces of consecutive sorted points so that a query can skip whole pieces beyond
+/// its distance limit.
 #[derive(Default)]
 pub(crate) struct Candidates {
     xs: Vec<f32>,
     ys: Vec<f32>,
     zs: Vec<f32>,
     index: Vec<u32>,
-    /// Per cell: end of its points in the arrays above, and its box.
-    cells: Vec<(usize, CellBox)>,
+    /// Per piece: end of its points in the arrays above, and its bounding box.
+    pieces: Vec<(usize, Box3)>,
 }
 
-/// Lower and upper corner of a cell.
-type CellBox = ([f64; 3], [f64; 3]);
+/// Points per candidate piece at most. Cells hold `k / 6` points on average, but a
+/// dense part of an uneven cloud (a scan near its scanner) packs thousands into one
+/// cell; split like this, a query computes distances only to the pieces near it.
+const PIECE: usize = 32;
+
+/// Lower and upper corner of an axis-aligned box.
+type Box3 = ([f64; 3], [f64; 3]);
 
 /// Per-thread buffers of the search.
 #[derive(Default)]
@@ -59,7 +65,8 @@ pub(crate) struct Scratch {
     shared: Candidates,
     own: Candidates,
     select: Selection,
-    by_distance: Vec<(f64, u32)>,
+    /// Octree nodes to visit, nearest first (see [`Grid::by_distance`]).
+    by_distance: BinaryHeap<Reverse<Node>>,
     /// The last query of this thread and its `k`-th squared distance: where the next
     /// query's limits come from, also across cells.
     prev: Option<([f32; 3], f32)>,
@@ -136,29 +143,32 @@ impl Grid {
         Some(self.range(i))
     }
 
-    /// Gathers the points of the cells within `r` of cell coordinates `c`.
-    fn gather(&self, s: &Sorted<'_>, c: [i64; 3], r: i64, out: &mut Candidates) {
+    /// Gathers the points of the cells within `RING` of cell coordinates `c`.
+    fn gather(&self, s: &Sorted<'_>, c: [i64; 3], out: &mut Candidates) {
         out.clear();
-        for z in c[2] - r..=c[2] + r {
-            for y in c[1] - r..=c[1] + r {
-                for x in c[0] - r..=c[0] + r {
+        for z in c[2] - RING..=c[2] + RING {
+            for y in c[1] - RING..=c[1] + RING {
+                for x in c[0] - RING..=c[0] + RING {
                     if let Some(range) = self.lookup([x, y, z]) {
-                        out.add(s, range, self.cell_box(s, [x, y, z]));
+                        out.add(s, range, self.block_box(s, [x, y, z], 1));
                     }
                 }
             }
         }
     }
 
-    fn cell_box(&self, s: &Sorted<'_>, c: [i64; 3]) -> CellBox {
+    /// Box of the `size`^3 cells from cell coordinates `c` up.
+    fn block_box(&self, s: &Sorted<'_>, c: [i64; 3], size: i64) -> Box3 {
         let lo = [0, 1, 2].map(|a| s.quant.face(a, (c[a] as u64) << self.level));
-        let hi = [0, 1, 2].map(|a| s.quant.face(a, ((c[a] + 1) as u64) << self.level));
+        let hi = [0, 1, 2].map(|a| s.quant.face(a, ((c[a] + size) as u64) << self.level));
         (lo, hi)
     }
 
-    /// Squared distance below which every point is in the box of radius `r` around
-    /// cell `c` (infinite when the box reaches past the grid on every side it faces).
-    fn limit(&self, s: &Sorted<'_>, c: [i64; 3], r: i64, p: [f32; 3]) -> f32 {
+    /// Squared distance from `p` below which every point is in the box of the cells
+    /// within `RING` of cell `c` (infinite when the box reaches past the grid on every
+    /// side it faces).
+    fn limit(&self, s: &Sorted<'_>, c: [i64; 3], p: [f32; 3]) -> f32 {
+        let r = RING;
         let mut bound = f64::INFINITY;
         for a in 0..3 {
             let x = f64::from(p[a]);
@@ -187,11 +197,11 @@ impl Grid {
     ) {
         let k = rows.len() / queries.len();
         let c = self.coords(s, cell);
-        self.gather(s, c, RING, &mut scratch.shared);
+        self.gather(s, c, &mut scratch.shared);
         for (pos, out) in queries.zip(rows.chunks_exact_mut(k)) {
             let p = s.points[pos];
             let q = s.order[pos];
-            let exact = self.limit(s, c, RING, p);
+            let exact = self.limit(s, c, p);
             let (guess, bound) = scratch
                 .prev
                 .map_or((f32::INFINITY, f32::INFINITY), |(x, kth)| {
@@ -201,12 +211,7 @@ impl Grid {
             let shared = &scratch.shared;
             let answered = (guess < exact && shared.best(p, q, guess, sel, out))
                 || (guess < bound && bound < exact && shared.best(p, q, bound, sel, out))
-                || shared.best(p, q, exact, sel, out)
-                || (RING + 1..=MAX_RING).any(|r| {
-                    self.gather(s, c, r, &mut scratch.own);
-                    let lim = self.limit(s, c, r, p);
-                    scratch.own.best(p, q, lim, &mut scratch.select, out)
-                });
+                || shared.best(p, q, exact, sel, out);
             if !answered {
                 self.by_distance(s, p, q, scratch, out);
             }
@@ -215,32 +220,71 @@ impl Grid {
         }
     }
 
-    /// Exact fallback for isolated points: visit cells by increasing distance.
+    /// Exact fallback for isolated points: visit cells by increasing distance until
+    /// `k` candidates are in and every cell within the `k`-th of them is visited.
+    ///
+    /// The cells are found best-first in the implicit octree above them (a node at
+    /// `depth` d is a run of cells sharing `code >> 3d`), so a query costs about
+    /// `log(cells)` node visits plus the cells near it, never a pass over all cells:
+    /// that pass made scattered outliers cost O(points x cells).
     fn by_distance(&self, s: &Sorted<'_>, p: [f32; 3], q: u32, sc: &mut Scratch, out: &mut [u32]) {
         let k = out.len();
-        sc.by_distance.clear();
-        for cell in 0..self.codes.len() {
-            let d2 = box_distance2(p, &self.cell_box(s, self.coords(s, cell)));
-            sc.by_distance.push((d2, cell as u32));
-        }
-        sc.by_distance.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let heap = &mut sc.by_distance;
+        heap.clear();
+        let root = Node {
+            distance: 0,
+            depth: BITS - self.level,
+            cells: (0, self.codes.len() as u32),
+        };
+        heap.push(Reverse(root));
         let own = &mut sc.own;
         own.clear();
         let mut reach = f64::INFINITY;
-        for &(d2, cell) in &sc.by_distance {
-            if d2 > reach {
+        while let Some(Reverse(node)) = heap.pop() {
+            if f64::from_bits(node.distance) > reach {
                 break;
             }
-            let cell = cell as usize;
-            own.add(s, self.range(cell), self.cell_box(s, self.coords(s, cell)));
-            if reach.is_infinite() && own.index.len() >= k {
-                own.best(p, q, f32::INFINITY, &mut sc.select, out);
-                let kth = key_distance(sc.select.sorted(k)[k - 1]);
-                reach = f64::from(kth) * (1.0 + MARGIN);
+            let (lo, hi) = (node.cells.0 as usize, node.cells.1 as usize);
+            if node.depth == 0 {
+                own.add(s, self.range(lo), self.block_box(s, self.coords(s, lo), 1));
+                if reach.is_infinite() && own.index.len() >= k {
+                    own.best(p, q, f32::INFINITY, &mut sc.select, out);
+                    let kth = key_distance(sc.select.sorted(k)[k - 1]);
+                    reach = f64::from(kth) * (1.0 + MARGIN);
+                }
+                continue;
+            }
+            // Children: the runs of equal `code >> 3 (depth - 1)` among the node's cells.
+            let shift = 3 * (node.depth - 1);
+            let mut start = lo;
+            while start < hi {
+                let child = self.codes[start] >> shift;
+                let end = start + self.codes[start..hi].partition_point(|&c| c >> shift == child);
+                let size = 1i64 << (node.depth - 1);
+                let corner = self.coords(s, start).map(|v| v & !(size - 1));
+                let d2 = box_distance2(p, &self.block_box(s, corner, size));
+                heap.push(Reverse(Node {
+                    distance: d2.to_bits(),
+                    depth: node.depth - 1,
+                    cells: (start as u32, end as u32),
+                }));
+                start = end;
             }
         }
         own.best(p, q, f32::INFINITY, &mut sc.select, out);
     }
+}
+
+/// A node of the implicit octree over the grid's cells, for [`Grid::by_distance`].
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Node {
+    /// Bits of the squared distance from the query to the node's box (non-negative
+    /// `f64` bits order like the values), so nodes order nearest first.
+    distance: u64,
+    /// Levels above the grid's cells (0: one cell).
+    depth: u32,
+    /// The node's cells: a range of indices into `Grid::codes`.
+    cells: (u32, u32),
 }
 
 impl Candidates {
@@ -249,16 +293,33 @@ impl Candidates {
         self.ys.clear();
         self.zs.clear();
         self.index.clear();
-        self.cells.clear();
+        self.pieces.clear();
     }
 
-    fn add(&mut self, s: &Sorted<'_>, range: Range<usize>, cell: CellBox) {
+    /// Appends the sorted points `range`, which fill the box `cell`: as one piece, or
+    /// when they are more than two pieces' worth, in pieces of [`PIECE`] points, each
+    /// with its bounding box.
+    fn add(&mut self, s: &Sorted<'_>, range: Range<usize>, cell: Box3) {
         let pts = &s.points[range.clone()];
         self.xs.extend(pts.iter().map(|p| p[0]));
         self.ys.extend(pts.iter().map(|p| p[1]));
         self.zs.extend(pts.iter().map(|p| p[2]));
+        let start = self.index.len();
         self.index.extend_from_slice(&s.order[range]);
-        self.cells.push((self.index.len(), cell));
+        if pts.len() <= 2 * PIECE {
+            self.pieces.push((self.index.len(), cell));
+            return;
+        }
+        for (i, piece) in pts.chunks(PIECE).enumerate() {
+            let mut bounds = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for p in piece {
+                for (a, &x) in p.iter().enumerate() {
+                    bounds.0[a] = bounds.0[a].min(f64::from(x));
+                    bounds.1[a] = bounds.1[a].max(f64::from(x));
+                }
+            }
+            self.pieces.push((start + i * PIECE + piece.len(), bounds));
+        }
     }
 
     /// The `out.len()` best candidates for point `p` (original index `q`) among those
@@ -269,10 +330,10 @@ impl Candidates {
         let k = out.len();
         sel.clear();
         let mut begin = 0;
-        for (end, cell) in &self.cells {
+        for (end, piece) in &self.pieces {
             let r = std::mem::replace(&mut begin, *end)..*end;
-            // Skip cells whose every point is beyond the limit (with a rounding margin).
-            if box_distance2(p, cell) * (1.0 - MARGIN) >= f64::from(lim) {
+            // Skip pieces whose every point is beyond the limit (with a rounding margin).
+            if box_distance2(p, piece) * (1.0 - MARGIN) >= f64::from(lim) {
                 continue;
             }
             let xyz = (
@@ -293,12 +354,12 @@ impl Candidates {
     }
 }
 
-/// Squared distance from `p` to the nearest point of `cell` (0 inside).
-fn box_distance2(p: [f32; 3], cell: &CellBox) -> f64 {
+/// Squared distance from `p` to the nearest point of box `b` (0 inside).
+fn box_distance2(p: [f32; 3], b: &Box3) -> f64 {
     (0..3)
         .map(|a| {
             let x = f64::from(p[a]);
-            let d = (cell.0[a] - x).max(x - cell.1[a]).max(0.0);
+            let d = (b.0[a] - x).max(x - b.1[a]).max(0.0);
             d * d
         })
         .sum()

@@ -219,7 +219,7 @@ mod tests {
     }
 
     /// A sphere surface, a dense blob, a line, exact duplicates and far outliers: every
-    /// search path (shared box, grown box, cells by distance) gets used.
+    /// search path (shared box, cells by distance) gets used.
     fn mixed_cloud(n: usize) -> Vec<[f32; 3]> {
         let mut r = rng(9);
         let mut pts: Vec<[f32; 3]> = (0..n)
@@ -261,6 +261,27 @@ mod tests {
     /// Consecutive queries of a cell prune candidates with the previous query's k-th
     /// distance: quantised coordinates (many exactly equal distances), stacks of
     /// duplicates and a sparse region must still give the brute-force lists.
+    #[test]
+    fn scattered_outliers_and_a_dense_core_match_brute_force() {
+        // Uneven like a real scan: a plane, a core on it far denser than the average cell
+        // (searched in pieces), and points scattered in a box a hundred times larger
+        // (each one found through the octree fallback).
+        let mut r = rng(3);
+        let mut pts: Vec<[f32; 3]> = (0..1500).map(|_| [r(), r(), 0.5]).collect();
+        pts.extend((0..400).map(|_| [0.3 + 0.001 * r(), 0.3 + 0.001 * r(), 0.5]));
+        pts.extend((0..100).map(|_| [100.0 * r() - 50.0, 100.0 * r() - 50.0, 100.0 * r() - 50.0]));
+        let c = cloud(pts.clone());
+        let idx = KnnIndex::new(&c).unwrap();
+        for k in [5, 40] {
+            idx.for_each_chunk(k, 300, |ch| {
+                for (j, &q) in ch.queries().iter().enumerate() {
+                    assert_eq!(ch.row(j), brute(&pts, q, k).as_slice(), "k {k} query {q}");
+                }
+            })
+            .unwrap();
+        }
+    }
+
     #[test]
     fn distance_bound_keeps_ties_and_duplicates_exact() {
         let mut r = rng(3);
