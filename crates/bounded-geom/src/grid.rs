@@ -49,12 +49,19 @@ pub(crate) struct Candidates {
     index: Vec<u32>,
     /// Per piece: end of its points in the arrays above, and its bounding box.
     pieces: Vec<(usize, Box3)>,
+    /// Per group of [`GROUP`] consecutive pieces: end of its pieces, and a box around
+    /// them, so that a query skips far groups without testing each piece.
+    groups: Vec<(usize, Box3)>,
 }
 
 /// Points per candidate piece at most. Cells hold `k / 6` points on average, but a
 /// dense part of an uneven cloud (a scan near its scanner) packs thousands into one
 /// cell; split like this, a query computes distances only to the pieces near it.
 const PIECE: usize = 32;
+
+/// Pieces per group: a cell holding a dense half of a million-point cloud becomes
+/// ~16k pieces, which one query would otherwise test one by one.
+const GROUP: usize = 32;
 
 /// Lower and upper corner of an axis-aligned box.
 type Box3 = ([f64; 3], [f64; 3]);
@@ -294,6 +301,20 @@ impl Candidates {
         self.zs.clear();
         self.index.clear();
         self.pieces.clear();
+        self.groups.clear();
+    }
+
+    fn push_piece(&mut self, end: usize, b: Box3) {
+        if self.pieces.len().is_multiple_of(GROUP) {
+            self.groups.push((self.pieces.len() + 1, b));
+        } else if let Some((last, g)) = self.groups.last_mut() {
+            *last += 1;
+            for a in 0..3 {
+                g.0[a] = g.0[a].min(b.0[a]);
+                g.1[a] = g.1[a].max(b.1[a]);
+            }
+        }
+        self.pieces.push((end, b));
     }
 
     /// Appends the sorted points `range`, which fill the box `cell`: as one piece, or
@@ -307,7 +328,7 @@ impl Candidates {
         let start = self.index.len();
         self.index.extend_from_slice(&s.order[range]);
         if pts.len() <= 2 * PIECE {
-            self.pieces.push((self.index.len(), cell));
+            self.push_piece(self.index.len(), cell);
             return;
         }
         for (i, piece) in pts.chunks(PIECE).enumerate() {
@@ -318,7 +339,7 @@ impl Candidates {
                     bounds.1[a] = bounds.1[a].max(f64::from(x));
                 }
             }
-            self.pieces.push((start + i * PIECE + piece.len(), bounds));
+            self.push_piece(start + i * PIECE + piece.len(), bounds);
         }
     }
 
@@ -329,19 +350,27 @@ impl Candidates {
     fn best(&self, p: [f32; 3], q: u32, lim: f32, sel: &mut Selection, out: &mut [u32]) -> bool {
         let k = out.len();
         sel.clear();
-        let mut begin = 0;
-        for (end, piece) in &self.pieces {
-            let r = std::mem::replace(&mut begin, *end)..*end;
-            // Skip pieces whose every point is beyond the limit (with a rounding margin).
-            if box_distance2(p, piece) * (1.0 - MARGIN) >= f64::from(lim) {
+        // Skips boxes whose every point is beyond the limit (with a rounding margin).
+        let beyond = |b: &Box3| box_distance2(p, b) * (1.0 - MARGIN) >= f64::from(lim);
+        let mut first_piece = 0;
+        for (last_piece, group) in &self.groups {
+            let pieces = std::mem::replace(&mut first_piece, *last_piece)..*last_piece;
+            if beyond(group) {
                 continue;
             }
-            let xyz = (
-                &self.xs[r.clone()],
-                &self.ys[r.clone()],
-                &self.zs[r.clone()],
-            );
-            sel.keep_within(p, q, lim, xyz, &self.index[r]);
+            let mut begin = pieces.start.checked_sub(1).map_or(0, |i| self.pieces[i].0);
+            for (end, piece) in &self.pieces[pieces] {
+                let r = std::mem::replace(&mut begin, *end)..*end;
+                if beyond(piece) {
+                    continue;
+                }
+                let xyz = (
+                    &self.xs[r.clone()],
+                    &self.ys[r.clone()],
+                    &self.zs[r.clone()],
+                );
+                sel.keep_within(p, q, lim, xyz, &self.index[r]);
+            }
         }
         if sel.kept() < k {
             return false;
