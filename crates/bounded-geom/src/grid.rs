@@ -1,5 +1,12 @@
 //! A uniform grid over Morton-sorted points, with cell-batched exact kNN queries.
 //!
+//! Performance on uneven clouds (real scans: dense near the scanner, sparse far away,
+//! outliers): the cell size follows the average density, so a dense cell can hold
+//! thousands of points; its points are kept in pieces of at most [`PIECE`] with their
+//! own boxes, grouped by [`GROUP`], and a query tests groups and pieces before any
+//! point. A point in a sparse part, whose neighbours lie beyond the shared box, visits
+//! cells best-first through the octree above them (see [`Grid::by_distance`]).
+//!
 //! Cells are cubes of one level of the implicit Morton octree, so each occupied cell is
 //! a contiguous run of the sorted points. All queries of a cell share one candidate set
 //! (the cells within `RING` of it); a query is answered from it when its `k` best

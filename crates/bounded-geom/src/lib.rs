@@ -9,7 +9,9 @@
 //! the sorted copy). It is a uniform grid over the Morton-sorted points whose cell size
 //! follows `k`; the queries of a cell share one candidate set, and a result is only
 //! accepted when no point outside that set can be closer, so it is exact (checked
-//! against brute force and kiddo in the tests). Neighbours come sorted by `f32`
+//! against brute force and kiddo in the tests). Uneven clouds stay fast: dense cells are
+//! searched in small boxed pieces, and points in sparse parts find their cells
+//! best-first in the octree above the grid. Neighbours come sorted by `f32`
 //! squared distance, the point itself first, ties by index, so every smaller `k` is a
 //! prefix. [`Sym3`] solves the small symmetric eigen problems of the local statistics
 //! in closed form.
