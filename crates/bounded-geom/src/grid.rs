@@ -311,6 +311,7 @@ impl Candidates {
         self.groups.clear();
     }
 
+    /// Appends a piece ending at point `end`, with box `b`, to the last group or a new one.
     fn push_piece(&mut self, end: usize, b: Box3) {
         if self.pieces.len().is_multiple_of(GROUP) {
             self.groups.push((self.pieces.len() + 1, b));
