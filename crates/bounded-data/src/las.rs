@@ -654,9 +654,9 @@ struct Plan<'a> {
     template: Vec<u8>,
     /// The fields after x, y, z that a property fills, with that property.
     fields: Vec<(Slot, Source<'a>)>,
-    /// The return number field when a property fills it, counted per record for the header;
-    /// `None` when every record keeps the template's return 1.
-    counted_returns: Option<Slot>,
+    /// The return number bit field (byte, shift, width) when a property fills it, counted
+    /// per record for the header; `None` when every record keeps the template's return 1.
+    counted_returns: Option<(usize, u8, u8)>,
 }
 
 impl<'a> Plan<'a> {
@@ -701,10 +701,19 @@ impl<'a> Plan<'a> {
         }
         let header = builder.into_header().map_err(|e| las_error(path, e))?;
         let default = |name: &str| standard.iter().find(|(n, _)| *n == name).map(|f| f.1);
-        let (Some(return_number), Some(number_of_returns)) =
-            (default("return_number"), default("number_of_returns"))
+        let (
+            Some(
+                return_number @ Slot::Bits {
+                    at: return_at,
+                    shift,
+                    width,
+                    ..
+                },
+            ),
+            Some(number_of_returns),
+        ) = (default("return_number"), default("number_of_returns"))
         else {
-            unreachable!("every point format has return numbers")
+            unreachable!("every point format has return numbers in a bit field")
         };
         let mut template = vec![0u8; usize::from(format.len())];
         return_number.put(1.0, &mut template);
@@ -714,7 +723,7 @@ impl<'a> Plan<'a> {
             record_len: template.len(),
             template,
             fields,
-            counted_returns: Source::of(view, "return_number").map(|_| return_number),
+            counted_returns: Source::of(view, "return_number").map(|_| (return_at, shift, width)),
         })
     }
 
@@ -742,14 +751,11 @@ impl<'a> Plan<'a> {
         let count = (records.len() / stride) as u64;
         let mut by_return = [0; 16];
         match self.counted_returns {
-            Some(Slot::Bits {
-                at, shift, width, ..
-            }) => {
+            Some((at, shift, width)) => {
                 for record in records.chunks_exact(stride) {
                     by_return[usize::from(bits_of(record[at], shift, width))] += 1;
                 }
             }
-            Some(Slot::Plain { .. }) => unreachable!("return numbers are bit fields"),
             None => by_return[1] = count,
         }
         Ok(Stats {

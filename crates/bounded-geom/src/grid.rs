@@ -270,11 +270,11 @@ impl Grid {
             }
             // Children: the runs of equal `code >> 3 (depth - 1)` among the node's cells.
             let shift = 3 * (node.depth - 1);
+            let size = 1i64 << (node.depth - 1);
             let mut start = lo;
             while start < hi {
                 let child = self.codes[start] >> shift;
                 let end = start + self.codes[start..hi].partition_point(|&c| c >> shift == child);
-                let size = 1i64 << (node.depth - 1);
                 let corner = self.coords(s, start).map(|v| v & !(size - 1));
                 let d2 = box_distance2(p, &self.block_box(s, corner, size));
                 heap.push(Reverse(Node {
