@@ -39,7 +39,7 @@ mod select;
 
 pub use class::Class;
 pub use cloud::PointCloud;
-pub use eigen::{Eigen3, Sym3, cross, dot};
+pub use eigen::{Eigen3, Sym3, cross, dot, eigenvalues_batch};
 pub use error::GeomError;
 pub use knn::{KnnIndex, NeighbourChunk};
 pub use morton::morton_order;
