@@ -27,30 +27,41 @@ pub(crate) const ALL_FEATURES: usize = 15;
 pub(crate) struct Scratch {
     /// Neighbours relative to the query point, in `f64`.
     local: Vec<[f64; 3]>,
-    /// Keys (squared distance to the centroid, rank) of the normal's half neighbourhood.
-    near_centroid: Vec<u64>,
     /// Moments of each scale's neighbourhood, smallest scale first.
     prefix: Vec<Moments>,
-    /// One batch of covariances (two per scale) and their eigenvalues.
-    matrices: Vec<Sym3>,
-    values: Vec<[f64; 3]>,
-    /// Each scale's frame, largest scale first.
-    frames: Vec<Frame>,
-    /// Each scale's upper and lower set, largest scale first.
-    sides: Vec<(Moments, Moments)>,
+    /// Keys (squared distance to the centroid, rank) of the normal's half neighbourhood.
+    near_centroid: Vec<u64>,
+    /// The eigen problems of a point, solved in batches.
+    batch: Batch,
 }
 
 impl Scratch {
     pub(crate) fn new(k0: usize) -> Self {
         Self {
             local: Vec::with_capacity(k0),
-            near_centroid: Vec::with_capacity(k0),
             prefix: Vec::new(),
-            matrices: Vec::new(),
-            values: Vec::new(),
-            frames: Vec::new(),
-            sides: Vec::new(),
+            near_centroid: Vec::with_capacity(k0),
+            batch: Batch::default(),
         }
+    }
+}
+
+/// One batch of covariances (two per scale) with their eigenvalues, and what the batches
+/// give per scale, largest scale first.
+#[derive(Default)]
+struct Batch {
+    matrices: Vec<Sym3>,
+    values: Vec<[f64; 3]>,
+    frames: Vec<Frame>,
+    /// The upper and lower set of each scale.
+    sides: Vec<(Moments, Moments)>,
+}
+
+impl Batch {
+    /// Solves the eigenvalues of `matrices` into `values`.
+    fn solve(&mut self) {
+        self.values.resize(self.matrices.len(), [0.0; 3]);
+        eigenvalues_batch(&self.matrices, &mut self.values);
     }
 }
 
@@ -162,63 +173,27 @@ pub(crate) fn point_features(
         running.extend(&local[running.n..k]);
         scratch.prefix.push(running);
     }
-    // Two batches of eigen problems (see `eigenvalues_batch`): first each scale's
-    // covariance and its half neighbourhood's, which give the frames; then each
-    // scale's upper and lower set, which need the frame's normal.
-    let scales = || {
-        config
-            .scales
-            .iter()
-            .copied()
-            .zip(scratch.prefix.iter().rev())
-    };
+    // Two batches of eigen problems (see `eigenvalues_batch`): each scale's covariance
+    // and its half neighbourhood's give the frames; then the upper and lower set of
+    // every scale, which need the frames' normals.
+    let batch = &mut scratch.batch;
+    let scales = config
+        .scales
+        .iter()
+        .copied()
+        .zip(scratch.prefix.iter().rev());
+    frames(local, scales.clone(), &mut scratch.near_centroid, batch);
+    sides(local, scales.clone(), batch);
     let count = config.scales.len();
-    scratch.matrices.clear();
-    scratch
-        .matrices
-        .extend(scales().map(|(_, m)| m.covariance()));
-    for (k, m) in scales() {
-        scratch.matrices.push(if k / 2 == 0 {
-            Sym3::default()
-        } else {
-            nearest_half(&local[..k], m.mean(), &mut scratch.near_centroid).covariance()
-        });
-    }
-    scratch.values.resize(scratch.matrices.len(), [0.0; 3]);
-    eigenvalues_batch(&scratch.matrices, &mut scratch.values);
-    scratch.frames.clear();
-    for (i, (k, m)) in scales().enumerate() {
-        let half = (k / 2 > 0).then(|| {
-            let j = count + i;
-            scratch.matrices[j].eigen_from(scratch.values[j])
-        });
-        scratch
-            .frames
-            .push(frame(m, m.variances(scratch.values[i]), half));
-    }
-    scratch.sides.clear();
-    for ((k, m), f) in scales().zip(&scratch.frames) {
-        let upper = upper_set(&local[..k], f);
-        scratch.sides.push((upper, m.minus(&upper)));
-    }
-    scratch.matrices.clear();
-    scratch
-        .matrices
-        .extend(scratch.sides.iter().map(|s| s.0.covariance()));
-    scratch
-        .matrices
-        .extend(scratch.sides.iter().map(|s| s.1.covariance()));
-    eigenvalues_batch(&scratch.matrices, &mut scratch.values);
-    let per_scale = config.features_per_scale();
-    let (m0, f0) = (&scratch.prefix[count - 1], &scratch.frames[0]);
-    let per_scale_out = out.chunks_exact_mut(per_scale);
-    for (i, ((_, moments), out)) in scales().zip(per_scale_out).enumerate() {
-        let (upper, lower) = &scratch.sides[i];
+    let (m0, f0) = (&scratch.prefix[count - 1], &batch.frames[0]);
+    let per_scale = out.chunks_exact_mut(config.features_per_scale());
+    for (i, ((_, moments), out)) in scales.zip(per_scale).enumerate() {
+        let (upper, lower) = &batch.sides[i];
         let sides = [
-            (upper, upper.variances(scratch.values[i])),
-            (lower, lower.variances(scratch.values[count + i])),
+            (upper, upper.variances(batch.values[i])),
+            (lower, lower.variances(batch.values[count + i])),
         ];
-        let frame = &scratch.frames[i];
+        let frame = &batch.frames[i];
         let mut all = scale_features(frame, sides);
         if i > 0 {
             // c: this scale's centroid against the rest of the k0 neighbourhood,
@@ -231,6 +206,58 @@ pub(crate) fn point_features(
             *o = all[i] as f32;
         }
     }
+}
+
+/// Each scale's frame into `batch.frames`, from the scales' sizes and moments, largest
+/// first.
+fn frames<'a>(
+    local: &[[f64; 3]],
+    scales: impl Iterator<Item = (usize, &'a Moments)> + Clone,
+    near_centroid: &mut Vec<u64>,
+    batch: &mut Batch,
+) {
+    let count = scales.clone().count();
+    batch.matrices.clear();
+    batch
+        .matrices
+        .extend(scales.clone().map(|(_, m)| m.covariance()));
+    for (k, m) in scales.clone() {
+        batch.matrices.push(if k / 2 == 0 {
+            Sym3::default()
+        } else {
+            nearest_half(&local[..k], m.mean(), near_centroid).covariance()
+        });
+    }
+    batch.solve();
+    batch.frames.clear();
+    for (i, (k, m)) in scales.enumerate() {
+        let j = count + i;
+        let half = (k / 2 > 0).then(|| batch.matrices[j].eigen_from(batch.values[j]));
+        let frame = frame(m, m.variances(batch.values[i]), half);
+        batch.frames.push(frame);
+    }
+}
+
+/// Each scale's upper and lower set into `batch.sides`, and their covariances'
+/// eigenvalues into `batch.values` (all upper sets, then all lower sets).
+fn sides<'a>(
+    local: &[[f64; 3]],
+    scales: impl Iterator<Item = (usize, &'a Moments)>,
+    batch: &mut Batch,
+) {
+    batch.sides.clear();
+    for ((k, m), f) in scales.zip(&batch.frames) {
+        let upper = upper_set(&local[..k], f);
+        batch.sides.push((upper, m.minus(&upper)));
+    }
+    batch.matrices.clear();
+    batch
+        .matrices
+        .extend(batch.sides.iter().map(|s| s.0.covariance()));
+    batch
+        .matrices
+        .extend(batch.sides.iter().map(|s| s.1.covariance()));
+    batch.solve();
 }
 
 /// A neighbourhood's normalised frame: centroid, scale factor and oriented normal.

@@ -166,9 +166,11 @@ const LANES: usize = 8;
 ///
 /// The same arithmetic, matrix by matrix, so every result is identical; but one
 /// matrix's eigenvalues are a long chain of dependent steps (square root, division,
-/// arc cosine, two series), and running the steps for [`LANES`] independent matrices
+/// arc cosine, two series), and running the steps for eight independent matrices
 /// side by side lets them overlap and vectorise: the features solve 16 of these per
 /// point, in two batches of 8.
+///
+/// Panics when `out` and `matrices` differ in length.
 pub fn eigenvalues_batch(matrices: &[Sym3], out: &mut [[f64; 3]]) {
     assert_eq!(matrices.len(), out.len(), "one output per matrix");
     for (m, o) in matrices.chunks(LANES).zip(out.chunks_mut(LANES)) {
