@@ -53,8 +53,8 @@ struct Batch {
     matrices: Vec<Sym3>,
     values: Vec<[f64; 3]>,
     frames: Vec<Frame>,
-    /// The upper and lower set of each scale.
-    sides: Vec<(Moments, Moments)>,
+    /// The upper and lower set of each scale, with their variances.
+    sides: Vec<[(Moments, [f64; 3]); 2]>,
 }
 
 impl Batch {
@@ -184,17 +184,11 @@ pub(crate) fn point_features(
         .zip(scratch.prefix.iter().rev());
     frames(local, scales.clone(), &mut scratch.near_centroid, batch);
     sides(local, scales.clone(), batch);
-    let count = config.scales.len();
-    let (m0, f0) = (&scratch.prefix[count - 1], &batch.frames[0]);
+    let (m0, f0) = (&scratch.prefix[config.scales.len() - 1], &batch.frames[0]);
     let per_scale = out.chunks_exact_mut(config.features_per_scale());
     for (i, ((_, moments), out)) in scales.zip(per_scale).enumerate() {
-        let (upper, lower) = &batch.sides[i];
-        let sides = [
-            (upper, upper.variances(batch.values[i])),
-            (lower, lower.variances(batch.values[count + i])),
-        ];
         let frame = &batch.frames[i];
-        let mut all = scale_features(frame, sides);
+        let mut all = scale_features(frame, &batch.sides[i]);
         if i > 0 {
             // c: this scale's centroid against the rest of the k0 neighbourhood,
             // in the k0 frame.
@@ -216,11 +210,11 @@ fn frames<'a>(
     near_centroid: &mut Vec<u64>,
     batch: &mut Batch,
 ) {
-    let count = scales.clone().count();
     batch.matrices.clear();
     batch
         .matrices
         .extend(scales.clone().map(|(_, m)| m.covariance()));
+    let count = batch.matrices.len();
     for (k, m) in scales.clone() {
         batch.matrices.push(if k / 2 == 0 {
             Sym3::default()
@@ -238,8 +232,7 @@ fn frames<'a>(
     }
 }
 
-/// Each scale's upper and lower set into `batch.sides`, and their covariances'
-/// eigenvalues into `batch.values` (all upper sets, then all lower sets).
+/// Each scale's upper and lower set, with their variances, into `batch.sides`.
 fn sides<'a>(
     local: &[[f64; 3]],
     scales: impl Iterator<Item = (usize, &'a Moments)>,
@@ -248,16 +241,23 @@ fn sides<'a>(
     batch.sides.clear();
     for ((k, m), f) in scales.zip(&batch.frames) {
         let upper = upper_set(&local[..k], f);
-        batch.sides.push((upper, m.minus(&upper)));
+        batch
+            .sides
+            .push([(upper, [0.0; 3]), (m.minus(&upper), [0.0; 3])]);
     }
+    // One batch: all upper sets, then all lower sets.
     batch.matrices.clear();
-    batch
-        .matrices
-        .extend(batch.sides.iter().map(|s| s.0.covariance()));
-    batch
-        .matrices
-        .extend(batch.sides.iter().map(|s| s.1.covariance()));
+    for side in 0..2 {
+        let sets = batch.sides.iter().map(|s| s[side].0.covariance());
+        batch.matrices.extend(sets);
+    }
     batch.solve();
+    let count = batch.sides.len();
+    for (i, pair) in batch.sides.iter_mut().enumerate() {
+        for (side, (set, variances)) in pair.iter_mut().enumerate() {
+            *variances = set.variances(batch.values[side * count + i]);
+        }
+    }
 }
 
 /// A neighbourhood's normalised frame: centroid, scale factor and oriented normal.
@@ -341,13 +341,13 @@ fn upper_set(pts: &[[f64; 3]], f: &Frame) -> Moments {
 
 /// The 15 values of one scale (all groups, `c` left at 0) in the normalised frame `f`,
 /// from the upper and lower sets with their variances.
-fn scale_features(f: &Frame, [upper, lower]: [(&Moments, [f64; 3]); 2]) -> [f64; ALL_FEATURES] {
+fn scale_features(f: &Frame, [upper, lower]: &[(Moments, [f64; 3]); 2]) -> [f64; ALL_FEATURES] {
     let mut all = [0.0; ALL_FEATURES];
     let s2 = f.scale * f.scale;
     all[..3].copy_from_slice(&f.variances.map(|v| v * s2));
     all[3..6].copy_from_slice(&upper.1.map(|v| v * s2));
     all[6..9].copy_from_slice(&lower.1.map(|v| v * s2));
-    let (upper, lower) = (upper.0, lower.0);
+    let (upper, lower) = (&upper.0, &lower.0);
     if upper.n > 0 && lower.n > 0 {
         let (mu, ml) = (upper.mean(), lower.mean());
         [all[9], all[10]] = split([0, 1, 2].map(|a| (mu[a] - ml[a]) * f.scale), f.normal);

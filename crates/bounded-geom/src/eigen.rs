@@ -70,29 +70,33 @@ impl Sym3 {
     /// Exact for diagonal matrices; otherwise accurate to about `1e-15` times the
     /// largest absolute eigenvalue. All-zero input gives zeros.
     pub fn eigenvalues(&self) -> [f64; 3] {
-        if let Some(d) = self.diagonal() {
-            return d;
+        let off = self.off_diagonal();
+        if off == 0.0 {
+            return self.sorted_diagonal();
         }
-        let (q, p, r) = self.trigonometric();
+        let (q, p, r) = self.trigonometric(off);
         roots(q, p, r.acos() * (1.0 / 3.0))
     }
 
-    /// The sorted diagonal, when the matrix is diagonal.
+    /// Sum of the squared off-diagonal entries above the diagonal: exactly 0 for a
+    /// diagonal matrix, whose eigenvalues are then its sorted diagonal.
     #[inline]
-    fn diagonal(&self) -> Option<[f64; 3]> {
-        let off = self.xy * self.xy + self.xz * self.xz + self.yz * self.yz;
-        (off == 0.0).then(|| {
-            let mut d = [self.xx, self.yy, self.zz];
-            d.sort_by(|a, b| b.total_cmp(a));
-            d
-        })
+    fn off_diagonal(&self) -> f64 {
+        self.xy * self.xy + self.xz * self.xz + self.yz * self.yz
     }
 
-    /// Smith's method: the mean eigenvalue `q`, the spread `p` and `r = cos(3 phi)`,
-    /// where the eigenvalues are `q + 2 p cos(phi + 2 pi j / 3)`.
+    /// The diagonal, largest first.
+    fn sorted_diagonal(&self) -> [f64; 3] {
+        let mut d = [self.xx, self.yy, self.zz];
+        d.sort_by(|a, b| b.total_cmp(a));
+        d
+    }
+
+    /// Smith's method for a matrix with [`off_diagonal`](Self::off_diagonal) `off > 0`:
+    /// the mean eigenvalue `q`, the spread `p` and `r = cos(3 phi)`, where the
+    /// eigenvalues are `q + 2 p cos(phi + 2 pi j / 3)`.
     #[inline]
-    fn trigonometric(&self) -> (f64, f64, f64) {
-        let off = self.xy * self.xy + self.xz * self.xz + self.yz * self.yz;
+    fn trigonometric(&self, off: f64) -> (f64, f64, f64) {
         let q = (self.xx + self.yy + self.zz) * (1.0 / 3.0);
         let (a, b, c) = (self.xx - q, self.yy - q, self.zz - q);
         let p = ((a * a + b * b + c * c + 2.0 * off) * (1.0 / 6.0)).sqrt();
@@ -176,20 +180,25 @@ pub fn eigenvalues_batch(matrices: &[Sym3], out: &mut [[f64; 3]]) {
     for (m, o) in matrices.chunks(LANES).zip(out.chunks_mut(LANES)) {
         let mut batch = [Sym3::default(); LANES];
         batch[..m.len()].copy_from_slice(m);
-        let diagonal = batch.map(|a| a.diagonal());
+        let off = batch.map(|a| a.off_diagonal());
         // Diagonal lanes (and the padding) keep p = 0: answered by their diagonal.
         let mut parts = [(0.0, 0.0, 0.0); LANES];
-        for ((part, a), d) in parts.iter_mut().zip(&batch).zip(&diagonal) {
-            if d.is_none() {
-                *part = a.trigonometric();
+        for ((part, a), &off) in parts.iter_mut().zip(&batch).zip(&off) {
+            if off != 0.0 {
+                *part = a.trigonometric(off);
             }
         }
         let mut phi = [0.0; LANES];
         for (phi, part) in phi.iter_mut().zip(&parts) {
             *phi = part.2.acos() * (1.0 / 3.0);
         }
-        for (((o, &(q, p, _)), &phi), d) in o.iter_mut().zip(&parts).zip(&phi).zip(diagonal) {
-            *o = d.unwrap_or_else(|| roots(q, p, phi));
+        let lanes = o.iter_mut().zip(&batch).zip(&off).zip(&parts).zip(&phi);
+        for ((((o, a), &off), &(q, p, _)), &phi) in lanes {
+            *o = if off == 0.0 {
+                a.sorted_diagonal()
+            } else {
+                roots(q, p, phi)
+            };
         }
     }
 }
@@ -275,17 +284,22 @@ mod tests {
         dot(d, d).sqrt()
     }
 
+    /// A linear congruential stream from `seed`, uniform in [-0.5, 0.5).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     #[test]
     fn batch_gives_the_scalar_results_bit_for_bit() {
         // Random symmetric matrices, a diagonal one, the zero matrix, a nearly
         // repeated pair; 19 of them, so the last batch is partial.
-        let mut state = 7u64;
-        let mut r = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut r = uniform(7);
         let mut m: Vec<Sym3> = (0..16)
             .map(|_| Sym3 {
                 xx: r(),
@@ -443,13 +457,7 @@ mod tests {
         // Scatter matrices of random point sets, from isotropic to nearly planar and
         // nearly collinear (axis scales down to 1e-6): trace, sum of the 2x2 principal
         // minors and determinant against the eigenvalues, relative to the largest one.
-        let mut state = 11u64;
-        let mut r = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut r = uniform(11);
         for i in 0..2000 {
             let squash = [1.0, 10f64.powi(-(i % 7)), 10f64.powi(-(i % 5))];
             let pts: Vec<[f64; 3]> = (0..16)
