@@ -85,6 +85,13 @@ pub struct TrainArgs {
     /// Feature groups per scale.
     #[arg(long, value_delimiter = ',', default_value = "sigma-u,sigma-l,d,s,c")]
     pub features: Vec<FeatureGroupArg>,
+    /// Output widths of the scale-fusion levels, the last repeating for deeper trees
+    /// (default: SPEC.md's 12,16).
+    #[arg(long, value_delimiter = ',')]
+    pub fusion_widths: Option<Vec<usize>>,
+    /// Widths of the classification MLP's hidden layers (default: SPEC.md's 16,16).
+    #[arg(long, value_delimiter = ',')]
+    pub hidden_widths: Option<Vec<usize>>,
 }
 
 /// A feature group on the command line.

@@ -5,7 +5,7 @@
 //! smaller configuration's features exactly a subset), so the ablations cost only training.
 
 use super::eval::{self, MethodResults, ModelResult};
-use super::train::{self, FeatureSet, Schedule};
+use super::train::{self, FeatureSet, Schedule, Widths};
 use super::{rate, sources};
 use crate::cli::BenchArgs;
 use crate::peers;
@@ -111,7 +111,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let main_train = train::feature_set(&training, &main, "features")?;
     let train_features_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let main_file = train::fit(&main_train, &main, &schedule, "bounded bench".into())?;
+    let main_file = train::fit(
+        &main_train,
+        &main,
+        &schedule,
+        &Widths::default(),
+        "bounded bench".into(),
+    )?;
     let train_s = t.elapsed().as_secs_f64();
     drop(main_train);
     let classifier = Classifier::from_file(main_file)?;
@@ -164,12 +170,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     )?);
 
     // 4: ablations; the configuration of the main model reuses it instead of retraining.
-    let ablation = |label: &str, target: &FeatureConfig| -> Result<String> {
+    let ablation = |label: &str, target: &FeatureConfig, widths: &Widths| -> Result<String> {
         let ablated;
-        let model = if *target == main {
+        let model = if *target == main && *widths == Widths::default() {
             &classifier
         } else {
-            ablated = trained(&train_full, &full, target, &ablation_schedule)?;
+            ablated = trained(&train_full, &full, target, &ablation_schedule, widths)?;
             &ablated
         };
         ablation_row(label, model, &full, target, &sets)
@@ -180,7 +186,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             scales: main.scales.clone(),
             groups,
         };
-        report.push_str(&ablation(label, &target)?);
+        report.push_str(&ablation(label, &target, &Widths::default())?);
     }
     report.push_str("\n## Scale ablation (all features)\n\n| scales | Default MCC | Default F1 | ABC MCC | ABC F1 | noisy ABC MCC |\n|---|---|---|---|---|---|\n");
     for count in [2, 4, 8, 16] {
@@ -188,7 +194,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         report.push_str(&ablation(
             &format!("{count}: {:?}", target.scales),
             &target,
+            &Widths::default(),
         )?);
+    }
+    report.push_str("\n## Width ablation (4 scales, all features)\n\n| fusion / hidden widths | Default MCC | Default F1 | ABC MCC | ABC F1 | noisy ABC MCC |\n|---|---|---|---|---|---|\n");
+    for widths in width_ablations() {
+        let label = format!(
+            "{:?} / {:?} ({} parameters)",
+            widths.fusion,
+            widths.hidden,
+            widths.model(&main).n_params()
+        );
+        report.push_str(&ablation(&label, &main, &widths)?);
     }
 
     // 5: noise and boundaries.
@@ -237,6 +254,22 @@ fn all_groups() -> FeatureGroups {
         sigma: true,
         ..FeatureGroups::BOUNDED
     }
+}
+
+/// SPEC.md's network and two wider ones (measured: wider helps every set a little, the noise
+/// gap hardly).
+fn width_ablations() -> [Widths; 3] {
+    [
+        Widths::default(),
+        Widths {
+            fusion: vec![16, 24],
+            hidden: vec![24, 24],
+        },
+        Widths {
+            fusion: vec![24, 32],
+            hidden: vec![48, 48],
+        },
+    ]
 }
 
 /// The paper's feature ablation, as (label, groups).
@@ -316,12 +349,14 @@ fn trained(
     full: &FeatureConfig,
     target: &FeatureConfig,
     schedule: &Schedule,
+    widths: &Widths,
 ) -> Result<Classifier> {
     let selected = select(set, &columns(full, target)?);
     let file = train::fit(
         &selected,
         target,
         schedule,
+        widths,
         "bounded bench (ablation)".into(),
     )?;
     Ok(Classifier::from_file(file)?)

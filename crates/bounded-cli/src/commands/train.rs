@@ -38,6 +38,35 @@ pub struct Schedule {
     pub seed: u64,
 }
 
+/// Layer widths of the network (see [`ModelConfig`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Widths {
+    /// Output width of each fusion level.
+    pub fusion: Vec<usize>,
+    /// Widths of the hidden layers.
+    pub hidden: Vec<usize>,
+}
+
+impl Default for Widths {
+    /// SPEC.md's network (about 1.6k parameters at 4 scales x 12 features).
+    fn default() -> Self {
+        let spec = ModelConfig::new(4, 12);
+        Self {
+            fusion: spec.fusion_widths,
+            hidden: spec.hidden_widths,
+        }
+    }
+}
+
+impl Widths {
+    /// The network for `config`'s features with these widths.
+    pub fn model(&self, config: &FeatureConfig) -> ModelConfig {
+        ModelConfig::new(config.scales.len(), config.features_per_scale())
+            .with_fusion_widths(self.fusion.clone())
+            .with_hidden_widths(self.hidden.clone())
+    }
+}
+
 /// Computes the features of every cloud with `config`.
 pub fn feature_set(
     clouds: &[(String, LabelledCloud)],
@@ -66,11 +95,11 @@ pub fn fit(
     set: &FeatureSet,
     config: &FeatureConfig,
     schedule: &Schedule,
+    widths: &Widths,
     command: String,
 ) -> Result<ModelFile> {
     let data = Dataset::new(&set.features, &set.labels, set.per_point)?;
-    let model = ModelConfig::new(config.scales.len(), config.features_per_scale());
-    let train_config = TrainConfig::new(model)
+    let train_config = TrainConfig::new(widths.model(config))
         .with_iterations(schedule.iterations)
         .with_runs(schedule.runs)
         .with_seed(schedule.seed);
@@ -131,6 +160,13 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         groups: groups(&args.features)?,
     };
     config.validate()?;
+    let defaults = Widths::default();
+    let widths = Widths {
+        fusion: args.fusion_widths.clone().unwrap_or(defaults.fusion),
+        hidden: args.hidden_widths.clone().unwrap_or(defaults.hidden),
+    };
+    // A bad width fails now, not after the features.
+    widths.model(&config).validate()?;
     let mut clouds = Vec::new();
     for source in &args.data {
         let loading = progress::spinner("load");
@@ -147,7 +183,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         seed: args.seed,
     };
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let file = fit(&set, &config, &schedule, command)?;
+    let file = fit(&set, &config, &schedule, &widths, command)?;
     save(&file, &args.output)?;
     let mut counts = [0usize; 3];
     for &l in &set.labels {
