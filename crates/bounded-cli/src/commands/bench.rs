@@ -73,7 +73,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     eprintln!(
         "bench: {} mode, expected duration about {} minutes on 2 cores (full mode peaks near 12 GB of memory)",
         if args.quick { "quick" } else { "full" },
-        if args.quick { 4 } else { 25 }
+        if args.quick { 4 } else { 35 }
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
