@@ -35,6 +35,8 @@ mod error;
 mod grid;
 mod knn;
 mod morton;
+#[cfg(target_arch = "x86_64")]
+mod network;
 mod select;
 
 pub use class::Class;
