@@ -38,6 +38,7 @@ mod morton;
 #[cfg(target_arch = "x86_64")]
 mod network;
 mod select;
+mod smallest;
 
 pub use class::Class;
 pub use cloud::PointCloud;
@@ -45,3 +46,4 @@ pub use eigen::{Eigen3, Sym3, cross, dot, eigenvalues_batch};
 pub use error::GeomError;
 pub use knn::{KnnIndex, NeighbourChunk};
 pub use morton::morton_order;
+pub use smallest::SmallestFirst;

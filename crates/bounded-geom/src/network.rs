@@ -38,6 +38,18 @@ impl Network {
         assert!((K..=MAX_KEPT).contains(&keys.len()));
         self.0.vectorize(SmallestSorted { simd: self.0, keys });
     }
+
+    /// Whether [`smaller_half`](Self::smaller_half) takes `n` keys.
+    pub(crate) fn halves(n: usize) -> bool {
+        matches!(n, 16 | 32 | 64 | 128)
+    }
+
+    /// Moves the smaller half of `keys` (distinct, a length that [`halves`](Self::halves)
+    /// takes) to the front, in no particular order.
+    pub(crate) fn smaller_half(self, keys: &mut [u64]) {
+        assert!(Self::halves(keys.len()));
+        self.0.vectorize(SmallerHalf { simd: self.0, keys });
+    }
 }
 
 /// The body of [`Network::smallest_sorted`], compiled for AVX-512: what it calls must
@@ -64,16 +76,68 @@ impl NullaryFnOnce for SmallestSorted<'_> {
         sort128(simd, &mut a);
         sort64(simd, &mut b);
         // The 64 smallest of a, then min(a[64 + t], b[63 - t]): a bitonic sequence.
-        let reverse: __m512i = cast([7u64, 6, 5, 4, 3, 2, 1, 0]);
-        for r in 0..K / 2 / L {
-            let last = cast(b[K / 2 / L - 1 - r]);
-            let flipped = cast(simd.avx512f._mm512_permutexvar_epi64(reverse, last));
-            let hi = K / 2 / L + r;
-            a[hi] = simd.min_u64x8(a[hi], flipped);
-        }
+        let (_, upper) = a.split_at_mut(K / 2 / L);
+        keep_smaller(simd, upper.try_into().unwrap(), &b);
         merge128(simd, &mut a);
         for (r, v) in a.iter().enumerate() {
             keys[r * L..(r + 1) * L].copy_from_slice(&cast::<u64x8, [u64; L]>(*v));
+        }
+    }
+}
+
+/// `a[i] = min(a[i], b[n - 1 - i])` for sorted `a` and `b` of `n = 8 R` keys: the `n`
+/// smallest of both, as a bitonic sequence.
+#[inline(always)]
+fn keep_smaller<const R: usize>(simd: V4, a: &mut [u64x8; R], b: &[u64x8; R]) {
+    let reverse: __m512i = cast([7u64, 6, 5, 4, 3, 2, 1, 0]);
+    for (r, x) in a.iter_mut().enumerate() {
+        let flipped = cast(
+            simd.avx512f
+                ._mm512_permutexvar_epi64(reverse, cast(b[R - 1 - r])),
+        );
+        *x = simd.min_u64x8(*x, flipped);
+    }
+}
+
+/// The smaller half of the `16 R` keys in `keys` into `keys[..8 R]`, in no particular
+/// order: both halves sorted by `$sort`, then [`keep_smaller`]. (A macro: a sort passed
+/// as a function value is not inlined, and its intrinsics become calls.)
+macro_rules! smaller_half {
+    ($simd:expr, $keys:expr, $r:literal, $sort:ident) => {{
+        let (simd, keys) = ($simd, $keys);
+        let mut a = [cast([0u64; L]); $r];
+        let mut b = [cast([0u64; L]); $r];
+        for r in 0..$r {
+            a[r] = load(keys, r * L);
+            b[r] = load(keys, ($r + r) * L);
+        }
+        $sort(simd, &mut a);
+        $sort(simd, &mut b);
+        keep_smaller(simd, &mut a, &b);
+        for (r, v) in a.iter().enumerate() {
+            keys[r * L..(r + 1) * L].copy_from_slice(&cast::<u64x8, [u64; L]>(*v));
+        }
+    }};
+}
+
+/// The body of [`Network::smaller_half`], compiled for AVX-512.
+struct SmallerHalf<'a> {
+    simd: V4,
+    keys: &'a mut [u64],
+}
+
+impl NullaryFnOnce for SmallerHalf<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn call(self) {
+        let Self { simd, keys } = self;
+        match keys.len() {
+            16 => smaller_half!(simd, keys, 1, sort8),
+            32 => smaller_half!(simd, keys, 2, sort16),
+            64 => smaller_half!(simd, keys, 4, sort32),
+            128 => smaller_half!(simd, keys, 8, sort64),
+            n => unreachable!("no network for {n} keys"),
         }
     }
 }
@@ -108,20 +172,23 @@ macro_rules! stages {
     };
 }
 
-/// Bitonic sort of the 128 keys in `v`, ascending (element `i` is lane `i % 8` of
-/// register `i / 8`).
-#[inline(always)]
-fn sort128(simd: V4, v: &mut [u64x8; 16]) {
-    stages!(simd, v, 16; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;
-        64: 32 16 8 4 2 1; 128: 64 32 16 8 4 2 1;);
+/// Bitonic sorts of `8 R` keys in `R` registers, ascending (element `i` is lane
+/// `i % 8` of register `i / 8`).
+macro_rules! sorter {
+    ($name:ident, $r:literal; $($k:literal: $($j:literal)*;)*) => {
+        #[inline(always)]
+        fn $name(simd: V4, v: &mut [u64x8; $r]) {
+            stages!(simd, v, $r; $($k: $($j)*;)*);
+        }
+    };
 }
-
-/// Bitonic sort of the 64 keys in `v`, ascending.
-#[inline(always)]
-fn sort64(simd: V4, v: &mut [u64x8; 8]) {
-    stages!(simd, v, 8; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;
-        64: 32 16 8 4 2 1;);
-}
+sorter!(sort8, 1; 2: 1; 4: 2 1; 8: 4 2 1;);
+sorter!(sort16, 2; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1;);
+sorter!(sort32, 4; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;);
+sorter!(sort64, 8; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;
+    64: 32 16 8 4 2 1;);
+sorter!(sort128, 16; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;
+    64: 32 16 8 4 2 1; 128: 64 32 16 8 4 2 1;);
 
 /// Sorts the bitonic sequence of 128 keys in `v`, ascending.
 #[inline(always)]

@@ -1,0 +1,161 @@
+//! Moving the `m` smallest of a set of keys to the front, the selection behind the
+//! features' half neighbourhoods.
+
+use std::cmp::Ordering;
+
+/// Moves the `m` smallest of distinct `u64` keys to the front, in no particular order.
+///
+/// The smaller half of 16, 32, 64 or 128 keys goes through AVX-512 sorting networks
+/// when the CPU has them (checked once, when the selector is made); anything else
+/// through a quickselect with branch-free partitions. Which keys come first is the
+/// same either way; their order is not.
+///
+/// ```
+/// use bounded_geom::SmallestFirst;
+/// let mut keys = [9u64, 3, 7, 1, 8, 2];
+/// SmallestFirst::new().apply(&mut keys, 3);
+/// keys[..3].sort();
+/// assert_eq!(keys[..3], [1, 2, 3]);
+/// ```
+#[derive(Clone, Copy)]
+pub struct SmallestFirst {
+    #[cfg(target_arch = "x86_64")]
+    network: Option<crate::network::Network>,
+}
+
+impl Default for SmallestFirst {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SmallestFirst {
+    /// A selector for this CPU.
+    pub fn new() -> Self {
+        Self {
+            #[cfg(target_arch = "x86_64")]
+            network: crate::network::Network::detect(),
+        }
+    }
+
+    /// Moves the `m` smallest of `keys` (distinct) to `keys[..m]`; all of them when
+    /// `m >= keys.len()`.
+    pub fn apply(&self, keys: &mut [u64], m: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(network) = self.network
+            && crate::network::Network::halves(keys.len())
+            && m == keys.len() / 2
+        {
+            network.smaller_half(keys);
+            return;
+        }
+        quickselect(keys, m);
+    }
+}
+
+/// [`SmallestFirst::apply`] without the networks.
+///
+/// Quickselect with branch-free Lomuto partitions: which side a key falls on is
+/// unpredictable, so an unconditional swap costs less than a branch. The pivot is the
+/// key at position `m`, which is nearly right for the features' half neighbourhoods:
+/// the neighbours come sorted by distance to the query point, which lies near the
+/// centroid. Together ~8% faster `detect` than `select_nth_unstable` (median-of-3
+/// pivots: ~5%).
+fn quickselect(keys: &mut [u64], m: usize) {
+    let (mut lo, mut hi) = (0, keys.len());
+    if m >= hi {
+        return;
+    }
+    while hi - lo > 3 {
+        let s = &mut keys[lo..hi];
+        let n = s.len();
+        // lo <= m < hi
+        let pivot = s[m - lo];
+        // Invariant: s[..store] < pivot <= s[store..i].
+        let mut store = 0;
+        for i in 0..n {
+            let v = s[i];
+            s.swap(i, store);
+            store += usize::from(v < pivot);
+        }
+        let cut = lo + store;
+        match cut.cmp(&m) {
+            Ordering::Equal => return,
+            Ordering::Greater => hi = cut,
+            Ordering::Less if store > 0 => lo = cut,
+            Ordering::Less => {
+                // Nothing below the pivot: it is the smallest, so it stays in front.
+                let at = s.iter().position(|&v| v == pivot).unwrap_or(0);
+                s.swap(0, at);
+                lo += 1;
+            }
+        }
+    }
+    keys[lo..hi].sort_unstable();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn smallest_first_matches_a_sort() {
+        // Random, ascending, descending and organ-pipe orders; every prefix length.
+        let mut state = 7u64;
+        let random: Vec<u64> = (0..130)
+            .map(|i| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (state >> 20) << 8 | i
+            })
+            .collect();
+        let ascending: Vec<u64> = (0..100).collect();
+        let descending: Vec<u64> = (0..100).rev().collect();
+        let pipe: Vec<u64> = (0..50).chain((50..100).rev()).collect();
+        for keys in [random, ascending, descending, pipe] {
+            let mut want = keys.clone();
+            want.sort_unstable();
+            for m in 1..=keys.len() {
+                let mut got = keys.clone();
+                quickselect(&mut got, m);
+                got[..m].sort_unstable();
+                assert_eq!(got[..m], want[..m], "m {m}");
+            }
+        }
+    }
+
+    #[test]
+    fn halves_of_every_network_size_match_a_sort() {
+        let select = SmallestFirst::new();
+        #[cfg(target_arch = "x86_64")]
+        if select.network.is_none() {
+            println!("the networks are not tested: this CPU has no AVX-512");
+        }
+        let mut state = 3u64;
+        for n in [16, 32, 64, 128] {
+            for round in 0..50 {
+                let keys: Vec<u64> = (0..n as u64)
+                    .map(|i| {
+                        state = state
+                            .wrapping_mul(6364136223846793005)
+                            .wrapping_add(1442695040888963407);
+                        // Nearly sorted (as the features' keys) or random.
+                        let high = if round % 2 == 0 {
+                            i + (state >> 62)
+                        } else {
+                            state >> 40
+                        };
+                        high << 8 | i
+                    })
+                    .collect();
+                let mut want = keys.clone();
+                want.sort_unstable();
+                let mut got = keys.clone();
+                select.apply(&mut got, n / 2);
+                got[..n / 2].sort_unstable();
+                assert_eq!(got[..n / 2], want[..n / 2], "n {n}");
+            }
+        }
+    }
+}
