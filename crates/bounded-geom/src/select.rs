@@ -5,7 +5,8 @@
 //! - one branch-free loop over the structure-of-arrays `f32` coordinates computes each
 //!   candidate's distance and keeps its key when within the limit (always write,
 //!   advance on keep) in a buffer that is never re-zeroed (a separate, vectorised
-//!   distance loop measured 1% slower: cells are small);
+//!   distance loop measured 1% slower: cells are small); with AVX-512, eight
+//!   candidates at a time (see the `network` module);
 //! - a key is `(f32 distance bits << 32 | index) + 1`, and 0 for the query itself, so
 //!   integer order is the documented neighbour order (query, distance, index), and
 //!   sorting needs no comparator. (A counting sort into distance buckets was tried and
@@ -60,13 +61,22 @@ impl Selection {
         (xs, ys, zs): (&[f32], &[f32], &[f32]),
         index: &[u32],
     ) {
-        let need = self.kept + index.len();
+        // Room for a whole register of keys past the last one kept.
+        let need = self.kept + index.len() + 8;
         if self.keys.len() < need {
             self.keys.resize(need, 0);
         }
         let mut kept = self.kept;
-        let xyz = xs.iter().zip(ys).zip(zs);
-        for (((&x, &y), &z), &i) in xyz.zip(index) {
+        let mut done = 0;
+        #[cfg(target_arch = "x86_64")]
+        if let Some(network) = self.network {
+            let out = &mut self.keys[kept..];
+            let written;
+            (written, done) = network.keep_within(p, q, lim, (xs, ys, zs), index, out);
+            kept += written;
+        }
+        let xyz = xs[done..].iter().zip(&ys[done..]).zip(&zs[done..]);
+        for (((&x, &y), &z), &i) in xyz.zip(&index[done..]) {
             let d = crate::knn::dist2(p, [x, y, z]);
             let key = (u64::from(d.to_bits()) << 32 | u64::from(i)) + 1;
             self.keys[kept] = if i == q { 0 } else { key };
