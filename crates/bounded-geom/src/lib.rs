@@ -47,3 +47,15 @@ pub use error::GeomError;
 pub use knn::{KnnIndex, NeighbourChunk};
 pub use morton::morton_order;
 pub use smallest::SmallestFirst;
+
+/// A 64-bit linear congruential stream for the tests' random keys.
+#[cfg(test)]
+fn test_stream(seed: u64) -> impl FnMut() -> u64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        state
+    }
+}

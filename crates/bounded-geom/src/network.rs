@@ -32,12 +32,12 @@ pub(crate) const K: usize = 128;
 /// The most kept keys they take.
 pub(crate) const MAX_KEPT: usize = K + K / 2;
 
-/// Sorting networks, when this CPU has AVX-512.
+/// The AVX-512 code paths, when this CPU has AVX-512.
 #[derive(Clone, Copy)]
 pub(crate) struct Network(V4);
 
 impl Network {
-    /// The networks, or `None` without AVX-512.
+    /// The AVX-512 paths, or `None` without AVX-512.
     pub(crate) fn detect() -> Option<Self> {
         V4::try_new().map(Self)
     }
@@ -329,17 +329,12 @@ mod tests {
             println!("skipped: this CPU has no AVX-512");
             return;
         };
-        let mut state = 11u64;
+        let mut random = crate::test_stream(11);
         for n in K..=MAX_KEPT {
             for round in 0..20 {
+                // Few distinct high parts (ties on distance), unique by index.
                 let mut keys: Vec<u64> = (0..n as u64)
-                    .map(|i| {
-                        state = state
-                            .wrapping_mul(6364136223846793005)
-                            .wrapping_add(1442695040888963407);
-                        // Few distinct high parts (ties on distance), unique by index.
-                        ((state >> 60) + round) << 32 | i
-                    })
+                    .map(|i| ((random() >> 60) + round) << 32 | i)
                     .collect();
                 let mut want = keys.clone();
                 want.sort_unstable();

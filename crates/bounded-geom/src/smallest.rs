@@ -101,15 +101,8 @@ mod tests {
     #[test]
     fn smallest_first_matches_a_sort() {
         // Random, ascending, descending and organ-pipe orders; every prefix length.
-        let mut state = 7u64;
-        let random: Vec<u64> = (0..130)
-            .map(|i| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (state >> 20) << 8 | i
-            })
-            .collect();
+        let mut random = crate::test_stream(7);
+        let random: Vec<u64> = (0..130).map(|i| (random() >> 20) << 8 | i).collect();
         let ascending: Vec<u64> = (0..100).collect();
         let descending: Vec<u64> = (0..100).rev().collect();
         let pipe: Vec<u64> = (0..50).chain((50..100).rev()).collect();
@@ -132,19 +125,17 @@ mod tests {
         if select.network.is_none() {
             println!("the networks are not tested: this CPU has no AVX-512");
         }
-        let mut state = 3u64;
+        let mut random = crate::test_stream(3);
         for n in [16, 32, 64, 128] {
             for round in 0..50 {
                 let keys: Vec<u64> = (0..n as u64)
                     .map(|i| {
-                        state = state
-                            .wrapping_mul(6364136223846793005)
-                            .wrapping_add(1442695040888963407);
+                        let r = random();
                         // Nearly sorted (as the features' keys) or random.
                         let high = if round % 2 == 0 {
-                            i + (state >> 62)
+                            i + (r >> 62)
                         } else {
-                            state >> 40
+                            r >> 40
                         };
                         high << 8 | i
                     })
