@@ -286,13 +286,8 @@ mod tests {
 
     /// A linear congruential stream from `seed`, uniform in [-0.5, 0.5).
     fn uniform(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
+        let mut stream = crate::test_stream(seed);
+        move || (stream() >> 11) as f64 / (1u64 << 53) as f64 - 0.5
     }
 
     #[test]

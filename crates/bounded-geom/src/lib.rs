@@ -48,7 +48,7 @@ pub use knn::{KnnIndex, NeighbourChunk};
 pub use morton::morton_order;
 pub use smallest::SmallestFirst;
 
-/// A 64-bit linear congruential stream for the tests' random keys.
+/// A 64-bit linear congruential stream for the tests.
 #[cfg(test)]
 fn test_stream(seed: u64) -> impl FnMut() -> u64 {
     let mut state = seed;

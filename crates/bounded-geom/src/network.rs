@@ -99,36 +99,24 @@ impl NullaryFnOnce for SmallestSorted<'_> {
     #[inline(always)]
     fn call(self) {
         let Self { simd, keys } = self;
-        let mut a = [cast([0u64; L]); K / L];
-        for (r, v) in a.iter_mut().enumerate() {
-            *v = load(keys, r * L);
-        }
-        let mut b = [cast([0u64; L]); K / 2 / L];
-        for (r, v) in b.iter_mut().enumerate() {
-            *v = load(keys, K + r * L);
-        }
+        let mut a: [u64x8; K / L] = load_registers(keys, 0);
+        let mut b: [u64x8; K / 2 / L] = load_registers(keys, K);
         sort128(simd, &mut a);
         sort64(simd, &mut b);
         // The 64 smallest of a, then min(a[64 + t], b[63 - t]): a bitonic sequence.
-        let (_, upper) = a.split_at_mut(K / 2 / L);
-        keep_smaller(simd, upper.try_into().unwrap(), &b);
+        keep_smaller(simd, &mut a[K / 2 / L..], &b);
         merge128(simd, &mut a);
-        for (r, v) in a.iter().enumerate() {
-            keys[r * L..(r + 1) * L].copy_from_slice(&cast::<u64x8, [u64; L]>(*v));
-        }
+        store_registers(keys, &a);
     }
 }
 
-/// `a[i] = min(a[i], b[n - 1 - i])` for sorted `a` and `b` of `n = 8 R` keys: the `n`
+/// `a[i] = min(a[i], b[n - 1 - i])` for sorted `a` and `b` of `n` keys each: the `n`
 /// smallest of both, as a bitonic sequence.
 #[inline(always)]
-fn keep_smaller<const R: usize>(simd: V4, a: &mut [u64x8; R], b: &[u64x8; R]) {
+fn keep_smaller(simd: V4, a: &mut [u64x8], b: &[u64x8]) {
     let reverse: __m512i = cast([7u64, 6, 5, 4, 3, 2, 1, 0]);
-    for (r, x) in a.iter_mut().enumerate() {
-        let flipped = cast(
-            simd.avx512f
-                ._mm512_permutexvar_epi64(reverse, cast(b[R - 1 - r])),
-        );
+    for (x, y) in a.iter_mut().zip(b.iter().rev()) {
+        let flipped = cast(simd.avx512f._mm512_permutexvar_epi64(reverse, cast(*y)));
         *x = simd.min_u64x8(*x, flipped);
     }
 }
@@ -139,18 +127,12 @@ fn keep_smaller<const R: usize>(simd: V4, a: &mut [u64x8; R], b: &[u64x8; R]) {
 macro_rules! smaller_half {
     ($simd:expr, $keys:expr, $r:literal, $sort:ident) => {{
         let (simd, keys) = ($simd, $keys);
-        let mut a = [cast([0u64; L]); $r];
-        let mut b = [cast([0u64; L]); $r];
-        for r in 0..$r {
-            a[r] = load(keys, r * L);
-            b[r] = load(keys, ($r + r) * L);
-        }
+        let mut a: [u64x8; $r] = load_registers(keys, 0);
+        let mut b: [u64x8; $r] = load_registers(keys, $r * L);
         $sort(simd, &mut a);
         $sort(simd, &mut b);
         keep_smaller(simd, &mut a, &b);
-        for (r, v) in a.iter().enumerate() {
-            keys[r * L..(r + 1) * L].copy_from_slice(&cast::<u64x8, [u64; L]>(*v));
-        }
+        store_registers(keys, &a);
     }};
 }
 
@@ -207,19 +189,17 @@ impl NullaryFnOnce for KeepWithin<'_> {
         let limit = avx._mm256_set1_ps(lim);
         let query = avx512._mm512_set1_epi64(i64::from(q));
         let one = avx512._mm512_set1_epi64(1);
-        let whole = index.len() / L * L;
-        for b in (0..whole).step_by(L) {
-            let lanes =
-                |c: &[f32]| -> __m256 { cast::<[f32; L], __m256>(c[b..b + L].try_into().unwrap()) };
+        let (index, _) = index.as_chunks::<L>();
+        let [xs, ys, zs] = [xs, ys, zs].map(|c| c.as_chunks::<L>().0);
+        for (b, &i) in index.iter().enumerate() {
             // (p - x)^2 + (p - y)^2 + (p - z)^2 in this order, as `knn::dist2`.
-            let [dx, dy, dz] =
-                [(px, xs), (py, ys), (pz, zs)].map(|(pc, c)| avx._mm256_sub_ps(pc, lanes(c)));
+            let [dx, dy, dz] = [(px, xs), (py, ys), (pz, zs)]
+                .map(|(pc, c)| avx._mm256_sub_ps(pc, cast::<[f32; L], __m256>(c[b])));
             let d = avx._mm256_add_ps(
                 avx._mm256_add_ps(avx._mm256_mul_ps(dx, dx), avx._mm256_mul_ps(dy, dy)),
                 avx._mm256_mul_ps(dz, dz),
             );
             let within = avx512._mm256_cmp_ps_mask::<_CMP_LT_OQ>(d, limit);
-            let i: [u32; L] = index[b..b + L].try_into().unwrap();
             let i = avx512._mm512_cvtepu32_epi64(cast(i));
             let bits = avx512._mm512_cvtepu32_epi64(cast(d));
             let key = avx512._mm512_add_epi64(
@@ -232,19 +212,29 @@ impl NullaryFnOnce for KeepWithin<'_> {
             out[kept..kept + L].copy_from_slice(&cast::<__m512i, [u64; L]>(packed));
             kept += within.count_ones() as usize;
         }
-        (kept, whole)
+        (kept, index.len() * L)
     }
 }
 
-/// Lanes `at..at + 8` of `keys`, `u64::MAX` beyond its end.
+/// `R` registers from `keys[at..]`, `u64::MAX` beyond its end.
 #[inline(always)]
-fn load(keys: &[u64], at: usize) -> u64x8 {
-    let mut lanes = [u64::MAX; L];
-    if let Some(have) = keys.get(at..) {
-        let n = have.len().min(L);
-        lanes[..n].copy_from_slice(&have[..n]);
+fn load_registers<const R: usize>(keys: &[u64], at: usize) -> [u64x8; R] {
+    std::array::from_fn(|r| {
+        let mut lanes = [u64::MAX; L];
+        if let Some(have) = keys.get(at + r * L..) {
+            let n = have.len().min(L);
+            lanes[..n].copy_from_slice(&have[..n]);
+        }
+        cast(lanes)
+    })
+}
+
+/// Writes `v` to the front of `keys`.
+#[inline(always)]
+fn store_registers(keys: &mut [u64], v: &[u64x8]) {
+    for (out, v) in keys.chunks_exact_mut(L).zip(v) {
+        out.copy_from_slice(&cast::<u64x8, [u64; L]>(*v));
     }
-    cast(lanes)
 }
 
 /// Lane `l ^ j` for every lane `l`.
