@@ -349,13 +349,16 @@ fn nearest_half(pts: &[[f64; 3]], m: [f64; 3], near: &mut NearCentroid) -> Momen
     );
     let half = pts.len() / 2;
     near.select.apply(keys, half);
+    // Word by word, each in a register: setting the bits in memory chains every key
+    // through a store and a load.
     let chosen = &mut near.chosen;
     chosen.clear();
-    chosen.resize(pts.len().div_ceil(64), 0);
-    for &key in &keys[..half] {
-        let j = (key & rank_bits) as usize;
-        chosen[j / 64] |= 1 << (j % 64);
-    }
+    chosen.extend((0..pts.len().div_ceil(64) as u64).map(|w| {
+        keys[..half].iter().fold(0u64, |word, &key| {
+            let j = key & rank_bits;
+            word | u64::from(j >> 6 == w) << (j & 63)
+        })
+    }));
     Moments::of_chosen(pts, chosen)
 }
 

@@ -11,7 +11,11 @@
 //! repeated pair by up to ~1e-8 of the largest, which is that pair's conditioning in
 //! Smith's method anyway. The sine and cosine of the third angle come from short
 //! Taylor series on its known range instead of the library's `sin_cos` (~1.5% of the
-//! extraction). [`eigenvalues_batch`] runs several matrices side by side.
+//! extraction). [`eigenvalues_batch`] runs eight matrices side by side, without a
+//! branch, and where the CPU has AVX-512 or AVX2 compiles that code for its vector
+//! registers; for that the arc cosine is computed here from a series (within 1 ulp
+//! of the library's) rather than called. 1M-point `detect` with AVX-512: 1.50 ->
+//! 1.41 s; with AVX2 only: 5% faster; the portable path unchanged.
 
 /// A symmetric 3x3 matrix, stored by its upper triangle.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -70,32 +74,39 @@ impl Sym3 {
     /// Exact for diagonal matrices; otherwise accurate to about `1e-15` times the
     /// largest absolute eigenvalue. All-zero input gives zeros.
     pub fn eigenvalues(&self) -> [f64; 3] {
+        self.eigenvalues_inlined()
+    }
+
+    /// [`eigenvalues`](Self::eigenvalues), inlined so that a batch vectorises.
+    #[inline(always)]
+    fn eigenvalues_inlined(&self) -> [f64; 3] {
         let off = self.off_diagonal();
-        if off == 0.0 {
-            return self.sorted_diagonal();
-        }
+        // Both answers, then a choice: no branch, so that batches vectorise.
+        let diagonal = self.sorted_diagonal();
         let (q, p, r) = self.trigonometric(off);
-        roots(q, p, r.acos() * (1.0 / 3.0))
+        let found = roots(q, p, acos(r) * (1.0 / 3.0));
+        if off == 0.0 { diagonal } else { found }
     }
 
     /// Sum of the squared off-diagonal entries above the diagonal: exactly 0 for a
     /// diagonal matrix, whose eigenvalues are then its sorted diagonal.
-    #[inline]
+    #[inline(always)]
     fn off_diagonal(&self) -> f64 {
         self.xy * self.xy + self.xz * self.xz + self.yz * self.yz
     }
 
-    /// The diagonal, largest first.
+    /// The diagonal, largest first (by a branch-free network).
+    #[inline(always)]
     fn sorted_diagonal(&self) -> [f64; 3] {
-        let mut d = [self.xx, self.yy, self.zz];
-        d.sort_by(|a, b| b.total_cmp(a));
-        d
+        let (a, b, c) = (self.xx, self.yy, self.zz);
+        let (hi, lo) = (a.max(b), a.min(b));
+        [hi.max(c), lo.max(hi.min(c)), lo.min(c)]
     }
 
-    /// Smith's method for a matrix with [`off_diagonal`](Self::off_diagonal) `off > 0`:
+    /// Smith's method for a matrix with [`off_diagonal`](Self::off_diagonal) `off`:
     /// the mean eigenvalue `q`, the spread `p` and `r = cos(3 phi)`, where the
-    /// eigenvalues are `q + 2 p cos(phi + 2 pi j / 3)`.
-    #[inline]
+    /// eigenvalues are `q + 2 p cos(phi + 2 pi j / 3)`; `r` is NaN when `p = 0`.
+    #[inline(always)]
     fn trigonometric(&self, off: f64) -> (f64, f64, f64) {
         let q = (self.xx + self.yy + self.zz) * (1.0 / 3.0);
         let (a, b, c) = (self.xx - q, self.yy - q, self.zz - q);
@@ -152,7 +163,7 @@ impl Sym3 {
 }
 
 /// Eigenvalues, largest first, from Smith's `q`, `p` and the third angle `phi`.
-#[inline]
+#[inline(always)]
 fn roots(q: f64, p: f64, phi: f64) -> [f64; 3] {
     let (sin, cos) = third_angle_sin_cos(phi);
     let largest = q + 2.0 * p * cos;
@@ -168,44 +179,117 @@ const LANES: usize = 8;
 
 /// [`Sym3::eigenvalues`] of each of `matrices`, into `out` (same length).
 ///
-/// The same arithmetic, matrix by matrix, so every result is identical; but one
-/// matrix's eigenvalues are a long chain of dependent steps (square root, division,
-/// arc cosine, two series), and running the steps for eight independent matrices
-/// side by side lets them overlap and vectorise: the features solve 16 of these per
-/// point, in two batches of 8.
+/// The same arithmetic, matrix by matrix, so every result is identical, on every CPU;
+/// but one matrix's eigenvalues are a long chain of dependent steps (square root,
+/// division, arc cosine, two series), and running the steps for eight independent
+/// matrices side by side lets them overlap and vectorise: the features solve 16 of
+/// these per point, in two batches of 8.
 ///
 /// Panics when `out` and `matrices` differ in length.
 pub fn eigenvalues_batch(matrices: &[Sym3], out: &mut [[f64; 3]]) {
     assert_eq!(matrices.len(), out.len(), "one output per matrix");
+    #[cfg(target_arch = "x86_64")]
+    if crate::network::eigenvalues(matrices, out) {
+        return;
+    }
+    solve_batches(matrices, out);
+}
+
+/// [`eigenvalues_batch`], inlined into the caller so that the AVX-512 path compiles it
+/// for its registers.
+#[inline(always)]
+pub(crate) fn solve_batches(matrices: &[Sym3], out: &mut [[f64; 3]]) {
     for (m, o) in matrices.chunks(LANES).zip(out.chunks_mut(LANES)) {
         let mut batch = [Sym3::default(); LANES];
         batch[..m.len()].copy_from_slice(m);
-        let off = batch.map(|a| a.off_diagonal());
-        // Diagonal lanes (and the padding) keep p = 0: answered by their diagonal.
-        let mut parts = [(0.0, 0.0, 0.0); LANES];
-        for ((part, a), &off) in parts.iter_mut().zip(&batch).zip(&off) {
-            if off != 0.0 {
-                *part = a.trigonometric(off);
+        // Entry by entry, so the lanes are whole registers.
+        let (xx, xy, xz) = (
+            batch.map(|a| a.xx),
+            batch.map(|a| a.xy),
+            batch.map(|a| a.xz),
+        );
+        let (yy, yz, zz) = (
+            batch.map(|a| a.yy),
+            batch.map(|a| a.yz),
+            batch.map(|a| a.zz),
+        );
+        let mut values = [[0.0; LANES]; 3];
+        for i in 0..LANES {
+            let a = Sym3 {
+                xx: xx[i],
+                xy: xy[i],
+                xz: xz[i],
+                yy: yy[i],
+                yz: yz[i],
+                zz: zz[i],
+            };
+            let v = a.eigenvalues_inlined();
+            for (values, v) in values.iter_mut().zip(v) {
+                values[i] = v;
             }
         }
-        let mut phi = [0.0; LANES];
-        for (phi, part) in phi.iter_mut().zip(&parts) {
-            *phi = part.2.acos() * (1.0 / 3.0);
-        }
-        let lanes = o.iter_mut().zip(&batch).zip(&off).zip(&parts).zip(&phi);
-        for ((((o, a), &off), &(q, p, _)), &phi) in lanes {
-            *o = if off == 0.0 {
-                a.sorted_diagonal()
-            } else {
-                roots(q, p, phi)
-            };
+        for (i, o) in o.iter_mut().enumerate() {
+            *o = values.map(|v| v[i]);
         }
     }
+}
+
+/// Arc cosine from arithmetic alone (no branch, no library call), so that a batch
+/// vectorises and every CPU gets the same bits; within 1 ulp of the library's on
+/// `[-1, 1]`, NaN for NaN.
+///
+/// `asin t = t + t z S(z)` with `z = t^2 <= 1/4`, for `t = |x| <= 1/2` or, nearer to
+/// 1, the half-angle argument `t = sqrt((1 - |x|) / 2)`.
+#[inline(always)]
+fn acos(x: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let a = x.abs();
+    let half_angle = a > 0.5;
+    let z = if half_angle { (1.0 - a) * 0.5 } else { a * a };
+    let t = if half_angle { z.sqrt() } else { a };
+    let asin = t + t * z * asin_series(z);
+    match (half_angle, x < 0.0) {
+        (true, true) => PI - 2.0 * asin,
+        (true, false) => 2.0 * asin,
+        (false, true) => FRAC_PI_2 + asin,
+        (false, false) => FRAC_PI_2 - asin,
+    }
+}
+
+/// `S(z) = sum_{n >= 1} a_n z^(n - 1)`, the arc sine's Taylor series after its first
+/// term, `a_n = (2n)! / (4^n (n!)^2 (2n + 1))`, for `0 <= z <= 1/4`: 24 terms leave out
+/// less than 3e-18. Even and odd terms are summed separately (two chains half as long).
+#[inline(always)]
+fn asin_series(z: f64) -> f64 {
+    const A: [f64; 24] = asin_taylor();
+    let z2 = z * z;
+    let (mut even, mut odd) = (0.0, 0.0);
+    for pair in A.chunks_exact(2).rev() {
+        even = pair[0] + z2 * even;
+        odd = pair[1] + z2 * odd;
+    }
+    even + z * odd
+}
+
+/// The arc sine's Taylor coefficients `a_1, a_2, ...` (of `t^3, t^5, ...`):
+/// `a_n = a_(n-1) (2n - 1)^2 / (2n (2n + 1))`, `a_0 = 1`.
+const fn asin_taylor<const N: usize>() -> [f64; N] {
+    let mut c = [0.0; N];
+    let mut a = 1.0;
+    let mut n = 1;
+    while n <= N {
+        let k = (2 * n) as f64;
+        a *= (k - 1.0) * (k - 1.0) / (k * (k + 1.0));
+        c[n - 1] = a;
+        n += 1;
+    }
+    c
 }
 
 /// `(sin x, cos x)` for `x` in `[0, pi / 3]`, from their Taylor series (the first
 /// omitted terms are below 2e-17 there); the library's `sin_cos` must first reduce an
 /// arbitrary argument.
+#[inline(always)]
 fn third_angle_sin_cos(x: f64) -> (f64, f64) {
     const SIN: [f64; 9] = taylor(1);
     const COS: [f64; 10] = taylor(0);
@@ -337,6 +421,24 @@ mod tests {
             let ((s, c), (ws, wc)) = (third_angle_sin_cos(x), x.sin_cos());
             assert!(close(s, ws, 2e-16) && close(c, wc, 2e-16), "{x}: {s} {c}");
         }
+    }
+
+    #[test]
+    fn acos_matches_the_library_to_one_ulp() {
+        // A dense grid over [-1, 1] (both sides of the switch at |x| = 1/2) and random
+        // points; the error in units of the spacing of f64 at the library's value.
+        let mut r = uniform(11);
+        let grid = (-100_000..=100_000).map(|i| f64::from(i) / 100_000.0);
+        let mut worst = 0.0f64;
+        for x in grid.chain((0..100_000).map(|_| 2.0 * r())) {
+            let (got, want) = (acos(x), x.acos());
+            let ulp = f64::from_bits(want.to_bits() + 1) - want;
+            worst = worst.max((got - want).abs() / ulp);
+        }
+        assert!(worst <= 1.0, "worst error {worst} ulp");
+        assert_eq!(acos(1.0), 0.0);
+        assert_eq!(acos(-1.0), std::f64::consts::PI);
+        assert!(acos(f64::NAN).is_nan());
     }
 
     #[test]
