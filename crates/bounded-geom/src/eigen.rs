@@ -72,7 +72,8 @@ impl Sym3 {
     /// Eigenvalues, largest first.
     ///
     /// Exact for diagonal matrices; otherwise accurate to about `1e-15` times the
-    /// largest absolute eigenvalue. All-zero input gives zeros.
+    /// largest absolute eigenvalue. All-zero input gives zeros. Entries must be finite
+    /// (a NaN on the diagonal of a diagonal matrix is not propagated).
     pub fn eigenvalues(&self) -> [f64; 3] {
         self.eigenvalues_inlined()
     }
@@ -195,8 +196,8 @@ pub fn eigenvalues_batch(matrices: &[Sym3], out: &mut [[f64; 3]]) {
     solve_batches(matrices, out);
 }
 
-/// [`eigenvalues_batch`], inlined into the caller so that the AVX-512 path compiles it
-/// for its registers.
+/// [`eigenvalues_batch`], inlined into the caller so that the AVX-512 and AVX2 paths
+/// compile it for their registers.
 #[inline(always)]
 pub(crate) fn solve_batches(matrices: &[Sym3], out: &mut [[f64; 3]]) {
     for (m, o) in matrices.chunks(LANES).zip(out.chunks_mut(LANES)) {
