@@ -347,13 +347,12 @@ fn nearest_half(pts: &[[f64; 3]], m: [f64; 3], near: &mut NearCentroid) -> Momen
     let rank_bits = pts.len().next_power_of_two() as u64 - 1;
     keys.clear();
     keys.resize(pts.len(), 0);
-    Keys {
+    pulp::Arch::new().dispatch(Keys {
         pts,
         m,
         rank_bits,
         keys,
-    }
-    .run();
+    });
     let half = pts.len() / 2;
     near.select.apply(keys, half);
     // Word by word, each in a register: setting the bits in memory chains every key
@@ -370,7 +369,9 @@ fn nearest_half(pts: &[[f64; 3]], m: [f64; 3], near: &mut NearCentroid) -> Momen
 }
 
 /// The keys of [`nearest_half`]: each point's squared distance to `m`, its rank in the
-/// low bits.
+/// low bits. `pulp` compiles this for AVX-512 and AVX2 registers and runs it at the best
+/// level the CPU has (the same operations, so the same keys): ~2% of `detect` on the 1M
+/// test cube with AVX-512.
 struct Keys<'a> {
     pts: &'a [[f64; 3]],
     m: [f64; 3],
@@ -378,37 +379,14 @@ struct Keys<'a> {
     keys: &'a mut [u64],
 }
 
-impl Keys<'_> {
-    /// Writes the keys, with code compiled for AVX-512 or AVX2 registers where the CPU
-    /// has them (detected at run time; the same operations, so the same keys): ~2% of
-    /// `detect` on the 1M test cube with AVX-512.
-    fn run(self) {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(simd) = pulp::x86::V4::try_new() {
-            simd.vectorize(self);
-            return;
-        } else if let Some(simd) = pulp::x86::V3::try_new() {
-            simd.vectorize(self);
-            return;
-        }
-        self.write();
-    }
-
-    #[inline(always)]
-    fn write(self) {
-        for ((k, q), j) in self.keys.iter_mut().zip(self.pts).zip(0u64..) {
-            *k = dist2(*q, self.m).to_bits() & !self.rank_bits | j;
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
 impl pulp::NullaryFnOnce for Keys<'_> {
     type Output = ();
 
     #[inline(always)]
     fn call(self) {
-        self.write();
+        for ((k, q), j) in self.keys.iter_mut().zip(self.pts).zip(0u64..) {
+            *k = dist2(*q, self.m).to_bits() & !self.rank_bits | j;
+        }
     }
 }
 

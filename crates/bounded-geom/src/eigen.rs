@@ -189,48 +189,54 @@ const LANES: usize = 8;
 /// Panics when `out` and `matrices` differ in length.
 pub fn eigenvalues_batch(matrices: &[Sym3], out: &mut [[f64; 3]]) {
     assert_eq!(matrices.len(), out.len(), "one output per matrix");
-    #[cfg(target_arch = "x86_64")]
-    if crate::network::eigenvalues(matrices, out) {
-        return;
-    }
-    solve_batches(matrices, out);
+    pulp::Arch::new().dispatch(Batches { matrices, out });
 }
 
-/// [`eigenvalues_batch`], inlined into the caller so that the AVX-512 and AVX2 paths
-/// compile it for their registers.
-#[inline(always)]
-pub(crate) fn solve_batches(matrices: &[Sym3], out: &mut [[f64; 3]]) {
-    for (m, o) in matrices.chunks(LANES).zip(out.chunks_mut(LANES)) {
-        let mut batch = [Sym3::default(); LANES];
-        batch[..m.len()].copy_from_slice(m);
-        // Entry by entry, so the lanes are whole registers.
-        let (xx, xy, xz) = (
-            batch.map(|a| a.xx),
-            batch.map(|a| a.xy),
-            batch.map(|a| a.xz),
-        );
-        let (yy, yz, zz) = (
-            batch.map(|a| a.yy),
-            batch.map(|a| a.yz),
-            batch.map(|a| a.zz),
-        );
-        let mut values = [[0.0; LANES]; 3];
-        for i in 0..LANES {
-            let a = Sym3 {
-                xx: xx[i],
-                xy: xy[i],
-                xz: xz[i],
-                yy: yy[i],
-                yz: yz[i],
-                zz: zz[i],
-            };
-            let v = a.eigenvalues_inlined();
-            for (values, v) in values.iter_mut().zip(v) {
-                values[i] = v;
+/// The body of [`eigenvalues_batch`], which `pulp` compiles for AVX-512 and AVX2
+/// registers (everything it calls is inlined) and runs at the best level the CPU has.
+struct Batches<'a> {
+    matrices: &'a [Sym3],
+    out: &'a mut [[f64; 3]],
+}
+
+impl pulp::NullaryFnOnce for Batches<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn call(self) {
+        let Self { matrices, out } = self;
+        for (m, o) in matrices.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            let mut batch = [Sym3::default(); LANES];
+            batch[..m.len()].copy_from_slice(m);
+            // Entry by entry, so the lanes are whole registers.
+            let (xx, xy, xz) = (
+                batch.map(|a| a.xx),
+                batch.map(|a| a.xy),
+                batch.map(|a| a.xz),
+            );
+            let (yy, yz, zz) = (
+                batch.map(|a| a.yy),
+                batch.map(|a| a.yz),
+                batch.map(|a| a.zz),
+            );
+            let mut values = [[0.0; LANES]; 3];
+            for i in 0..LANES {
+                let a = Sym3 {
+                    xx: xx[i],
+                    xy: xy[i],
+                    xz: xz[i],
+                    yy: yy[i],
+                    yz: yz[i],
+                    zz: zz[i],
+                };
+                let v = a.eigenvalues_inlined();
+                for (values, v) in values.iter_mut().zip(v) {
+                    values[i] = v;
+                }
             }
-        }
-        for (i, o) in o.iter_mut().enumerate() {
-            *o = values.map(|v| v[i]);
+            for (i, o) in o.iter_mut().enumerate() {
+                *o = values.map(|v| v[i]);
+            }
         }
     }
 }

@@ -1,6 +1,6 @@
 //! AVX-512 code for the hot loops of the search and the features, used when the CPU has
-//! AVX-512 (detected at run time through `pulp`, so the binary stays portable), and
-//! AVX2 for the eigenvalues. Every result is bit for bit that of the portable path.
+//! AVX-512 (detected at run time through `pulp`, so the binary stays portable). Every
+//! result is bit for bit that of the portable path.
 //!
 //! Performance notes (1M-point surface cloud, `detect`, interleaved runs):
 //! - sorting the kept neighbour keys: the usual search keeps 128..~170 keys for
@@ -13,9 +13,7 @@
 //! - the smaller half of 16..128 keys (the normal's half neighbourhood): both halves
 //!   sorted, one min against the reversed other: ~4% faster than the quickselect;
 //! - the distance filter, eight candidates per register, keys packed by a compress:
-//!   ~4.5% (7% on an airborne scan);
-//! - the eigenvalues of eight matrices at once: the portable code, compiled for
-//!   AVX-512 (or AVX2) registers: ~6% (AVX2: 5%).
+//!   ~4.5% (7% on an airborne scan).
 //!
 //! The same sort written with `std::arch` behind one `unsafe` entry measured 2.5%
 //! slower; enabling pulp's AVX-512 level for the whole build left the models `train`
@@ -25,10 +23,8 @@
 
 use std::arch::x86_64::{__m256, __m512i, _CMP_LT_OQ};
 
-use pulp::x86::{V3, V4};
+use pulp::x86::V4;
 
-use crate::Sym3;
-use crate::eigen::solve_batches;
 use pulp::{NullaryFnOnce, b8, cast, u64x8};
 
 /// Lanes per register.
@@ -89,36 +85,6 @@ impl Network {
     pub(crate) fn smaller_half(self, keys: &mut [u64]) {
         assert!(Self::halves(keys.len()));
         self.0.vectorize(SmallerHalf { simd: self.0, keys });
-    }
-}
-
-/// [`eigenvalues_batch`](crate::eigenvalues_batch) compiled for AVX-512 or AVX2
-/// registers (the portable code, so the same operations and bits), or false when the
-/// CPU has neither.
-pub(crate) fn eigenvalues(matrices: &[Sym3], out: &mut [[f64; 3]]) -> bool {
-    let body = Eigenvalues { matrices, out };
-    if let Some(simd) = V4::try_new() {
-        simd.vectorize(body);
-    } else if let Some(simd) = V3::try_new() {
-        simd.vectorize(body);
-    } else {
-        return false;
-    }
-    true
-}
-
-/// The body of [`eigenvalues`].
-struct Eigenvalues<'a> {
-    matrices: &'a [Sym3],
-    out: &'a mut [[f64; 3]],
-}
-
-impl NullaryFnOnce for Eigenvalues<'_> {
-    type Output = ();
-
-    #[inline(always)]
-    fn call(self) {
-        solve_batches(self.matrices, self.out);
     }
 }
 

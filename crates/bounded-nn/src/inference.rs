@@ -128,14 +128,13 @@ impl Classifier {
                     )
                 },
                 |(a, b), (rows, out)| {
-                    let task = Task {
+                    pulp::Arch::new().dispatch(Task {
                         model: self,
                         rows,
                         out,
                         a,
                         b,
-                    };
-                    task.run();
+                    });
                 },
             );
         Ok(())
@@ -181,7 +180,10 @@ impl Classifier {
     }
 }
 
-/// The blocks of one rayon task, with its activation buffers.
+/// The blocks of one rayon task, with its activation buffers. `pulp` compiles them for
+/// AVX-512 and AVX2 registers and runs them at the best level the CPU has (the same
+/// operations, so the same bits): a block's lanes are one AVX-512 register instead of
+/// four SSE2 ones.
 struct Task<'a> {
     model: &'a Classifier,
     rows: &'a [f32],
@@ -190,39 +192,16 @@ struct Task<'a> {
     b: &'a mut [Block],
 }
 
-impl Task<'_> {
-    /// Runs the blocks, compiled for AVX-512 or AVX2 registers where the CPU has them
-    /// (detected at run time; the same operations, so the same bits): a block's lanes
-    /// are one AVX-512 register instead of four SSE2 ones.
-    fn run(self) {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(simd) = pulp::x86::V4::try_new() {
-            simd.vectorize(self);
-            return;
-        } else if let Some(simd) = pulp::x86::V3::try_new() {
-            simd.vectorize(self);
-            return;
-        }
-        self.blocks();
-    }
-
-    #[inline(always)]
-    fn blocks(self) {
-        let n = self.model.n_inputs();
-        let rows = self.rows.chunks(LANES * n);
-        for (rows, out) in rows.zip(self.out.chunks_mut(LANES)) {
-            self.model.forward_block(rows, out, self.a, self.b);
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
 impl pulp::NullaryFnOnce for Task<'_> {
     type Output = ();
 
     #[inline(always)]
     fn call(self) {
-        self.blocks();
+        let n = self.model.n_inputs();
+        let rows = self.rows.chunks(LANES * n);
+        for (rows, out) in rows.zip(self.out.chunks_mut(LANES)) {
+            self.model.forward_block(rows, out, self.a, self.b);
+        }
     }
 }
 
