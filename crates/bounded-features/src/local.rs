@@ -11,8 +11,10 @@
 //!   bits with the rank in the low bits) rather than on (distance, rank) pairs (~3%),
 //!   with [`SmallestFirst`]: a branch-free quickselect instead of
 //!   `select_nth_unstable` (~8%), and AVX-512 sorting networks where the CPU has
-//!   them (another ~4%); the half is then summed in rank order (from a bit set of the
-//!   chosen ranks, ~3%), so the features do not depend on which selection ran; the
+//!   them (another ~4%), which mark the half's ranks as bits by comparing every key
+//!   with the half's largest (~2% over setting them key by key); the half is then
+//!   summed in rank order (from those bits, ~3%), so the features do not depend on
+//!   which selection ran; the
 //!   keys are computed by code compiled for AVX-512 / AVX2 where the CPU has them
 //!   (~2%); the same treatment did not pay for the neighbour gather and the upper-set
 //!   compaction, nor did summing moments in vector lanes, side by side, or in two
@@ -353,19 +355,8 @@ fn nearest_half(pts: &[[f64; 3]], m: [f64; 3], near: &mut NearCentroid) -> Momen
         rank_bits,
         keys,
     });
-    let half = pts.len() / 2;
-    near.select.apply(keys, half);
-    // Word by word, each in a register: setting the bits in memory chains every key
-    // through a store and a load.
-    let chosen = &mut near.chosen;
-    chosen.clear();
-    chosen.extend((0..pts.len().div_ceil(64) as u64).map(|w| {
-        keys[..half].iter().fold(0u64, |word, &key| {
-            let j = key & rank_bits;
-            word | u64::from(j >> 6 == w) << (j & 63)
-        })
-    }));
-    Moments::of_chosen(pts, chosen)
+    near.select.mark(keys, pts.len() / 2, &mut near.chosen);
+    Moments::of_chosen(pts, &near.chosen)
 }
 
 /// The keys of [`nearest_half`]: each point's squared distance to `m`, its rank in the

@@ -3,24 +3,25 @@
 
 use std::cmp::Ordering;
 
-/// Moves the `m` smallest of distinct `u64` keys to the front, in no particular order.
+/// Marks the `m` smallest of a set of distinct `u64` keys, as bits by position.
 ///
-/// The smaller half of 16, 32, 64 or 128 keys goes through AVX-512 sorting networks
-/// when the CPU has them (checked once, when the selector is made); anything else
-/// through a quickselect with branch-free partitions. Which keys come first is the
-/// same either way; their order is not.
+/// The smaller half of 16, 32, 64 or 128 keys is found by AVX-512 code when the CPU has
+/// it (checked once, when the selector is made: a bracket from the nearly sorted keys,
+/// or sorting networks); anything else by a quickselect with branch-free partitions on
+/// a copy. The marked keys are the same either way.
 ///
 /// ```
 /// use bounded_geom::SmallestFirst;
-/// let mut keys = [9u64, 3, 7, 1, 8, 2];
-/// SmallestFirst::new().apply(&mut keys, 3);
-/// keys[..3].sort();
-/// assert_eq!(keys[..3], [1, 2, 3]);
+/// let mut bits = Vec::new();
+/// SmallestFirst::new().mark(&[9, 3, 7, 1, 8, 2], 3, &mut bits);
+/// assert_eq!(bits, [0b10_1010]);
 /// ```
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 pub struct SmallestFirst {
     #[cfg(target_arch = "x86_64")]
     network: Option<crate::network::Network>,
+    /// The quickselect's copy of the keys.
+    copy: Vec<u64>,
 }
 
 impl Default for SmallestFirst {
@@ -35,25 +36,39 @@ impl SmallestFirst {
         Self {
             #[cfg(target_arch = "x86_64")]
             network: crate::network::Network::detect(),
+            copy: Vec::new(),
         }
     }
 
-    /// Moves the `m` smallest of `keys` (distinct) to `keys[..m]`; all of them when
-    /// `m >= keys.len()`.
-    pub fn apply(&self, keys: &mut [u64], m: usize) {
+    /// Sets `bits` to `keys.len().div_ceil(64)` words with bit `j % 64` of word `j / 64`
+    /// set when `keys[j]` is one of the `m` smallest of `keys` (distinct); all of them
+    /// when `m >= keys.len()`.
+    pub fn mark(&mut self, keys: &[u64], m: usize, bits: &mut Vec<u64>) {
+        bits.clear();
+        bits.resize(keys.len().div_ceil(64), 0);
         #[cfg(target_arch = "x86_64")]
         if let Some(network) = self.network
             && crate::network::Network::halves(keys.len())
             && m == keys.len() / 2
         {
-            network.smaller_half(keys);
+            network.mark_smaller_half(keys, bits);
             return;
         }
-        quickselect(keys, m);
+        let m = m.min(keys.len());
+        if m == 0 {
+            return;
+        }
+        self.copy.clear();
+        self.copy.extend_from_slice(keys);
+        quickselect(&mut self.copy, m);
+        let threshold = self.copy[..m].iter().copied().max().unwrap_or(0);
+        for (j, &key) in keys.iter().enumerate() {
+            bits[j / 64] |= u64::from(key <= threshold) << (j % 64);
+        }
     }
 }
 
-/// [`SmallestFirst::apply`] without the networks.
+/// Moves the `m` smallest of `keys` to the front: [`SmallestFirst::mark`] without AVX-512.
 ///
 /// Quickselect with branch-free Lomuto partitions: which side a key falls on is
 /// unpredictable, so an unconditional swap costs less than a branch. The pivot is the
@@ -119,33 +134,41 @@ mod tests {
     }
 
     #[test]
-    fn halves_of_every_network_size_match_a_sort() {
-        let select = SmallestFirst::new();
+    fn marks_match_a_sort_for_halves_and_other_counts() {
+        let mut select = SmallestFirst::new();
         #[cfg(target_arch = "x86_64")]
         if select.network.is_none() {
-            println!("the networks are not tested: this CPU has no AVX-512");
+            println!("the AVX-512 path is not tested: this CPU has no AVX-512");
         }
         let mut random = crate::test_stream(3);
-        for n in [16, 32, 64, 128] {
-            for round in 0..50 {
+        for n in [16usize, 32, 45, 64, 128] {
+            for round in 0..200 {
                 let keys: Vec<u64> = (0..n as u64)
                     .map(|i| {
                         let r = random();
-                        // Nearly sorted (as the features' keys) or random.
-                        let high = if round % 2 == 0 {
-                            i + (r >> 62)
-                        } else {
-                            r >> 40
+                        // Nearly sorted (as the features' keys, most taking the
+                        // bracket), shuffled a little more, or random (the networks).
+                        let high = match round % 3 {
+                            0 => i + (r >> 62),
+                            1 => i + (r >> 59),
+                            _ => r >> 40,
                         };
                         high << 8 | i
                     })
                     .collect();
-                let mut want = keys.clone();
-                want.sort_unstable();
-                let mut got = keys.clone();
-                select.apply(&mut got, n / 2);
-                got[..n / 2].sort_unstable();
-                assert_eq!(got[..n / 2], want[..n / 2], "n {n}");
+                let mut sorted = keys.clone();
+                sorted.sort_unstable();
+                for m in [n / 2, 1, n - 1] {
+                    let mut want = vec![0u64; n.div_ceil(64)];
+                    for (j, key) in keys.iter().enumerate() {
+                        if *key <= sorted[m - 1] {
+                            want[j / 64] |= 1 << (j % 64);
+                        }
+                    }
+                    let mut got = Vec::new();
+                    select.mark(&keys, m, &mut got);
+                    assert_eq!(got, want, "n {n} m {m} round {round}");
+                }
             }
         }
     }
