@@ -3,7 +3,7 @@
 use bounded_geom::{KnnIndex, PointCloud};
 use rayon::prelude::*;
 
-use crate::local::{Scratch, point_features};
+use crate::local::{LANES, Scratch, group_features};
 use crate::{FeatureConfig, FeatureError};
 
 /// Points per block of [`extract`]: 16384 x 128 neighbours x 4 B = 8 MiB of
@@ -134,13 +134,11 @@ pub fn extract_chunks(
         block.values.resize(chunk.len() * block.per_point, 0.0);
         block
             .values
-            .par_chunks_mut(block.per_point)
-            .zip(chunk.rows().par_chunks(k0))
+            .par_chunks_mut(block.per_point * LANES)
+            .zip(chunk.rows().par_chunks(k0 * LANES))
             .for_each_init(
                 || Scratch::new(k0),
-                |scratch, (out, neighbours)| {
-                    point_features(points, neighbours, config, scratch, out)
-                },
+                |scratch, (out, rows)| group_features(points, rows, config, scratch, out),
             );
         f(&block);
     })?;

@@ -19,12 +19,13 @@
 //!   (~2%); the same treatment did not pay for the neighbour gather and the upper-set
 //!   compaction, nor did summing moments in vector lanes, side by side, or in two
 //!   chains (the sets are short: dispatch and setup cost as much as they save);
-//! - the upper set is first compacted without a branch, then summed: on real scans
-//!   which side a neighbour lies on is unpredictable (+12% points/s on an airborne
-//!   LiDAR tile, +3% on a room scan, -1% on the smooth test cube); summing every point
-//!   with a zero weight instead cost 4% on the cube;
-//! - tried, did not pay: two accumulator sets per sum, summing all k with lane masks
-//!   (eight points at a time, structure-of-arrays: 40% slower even with AVX-512),
+//! - the upper sets of eight points are summed side by side, a point per vector lane
+//!   (AVX-512: one register per sum for all eight), each lane adding only where its
+//!   point is in U: 6% faster on the 1M test cube than compacting each point's set
+//!   without a branch and summing it (which had beaten a branch on real scans, where
+//!   which side a neighbour lies on is unpredictable, and a zero weight per point);
+//! - tried, did not pay: two accumulator sets per sum, summing one point's k
+//!   neighbours eight at a time with lane masks (40% slower even with AVX-512),
 //!   sorting instead of selecting small half-neighbourhoods, and (in `bounded-geom`)
 //!   rows ordered only by scale bands instead of fully sorted, as the selections that
 //!   replace the sort cost as much and the half-neighbourhood selection is slower on
@@ -37,8 +38,29 @@ use crate::FeatureConfig;
 /// Values per scale with every group on (see `config::NAMES`).
 pub(crate) const ALL_FEATURES: usize = 15;
 
-/// Per-thread buffers, reused from point to point so the hot loop never allocates.
+/// Points processed side by side: their upper sets are summed in one pass, a point per
+/// vector lane.
+pub(crate) const LANES: usize = 8;
+
+/// Per-thread buffers, reused from group to group so the hot loop never allocates.
 pub(crate) struct Scratch {
+    /// One point's buffers per lane.
+    lanes: Vec<Lane>,
+    /// The lanes' neighbours side by side: `[neighbour][axis][lane]`.
+    side_by_side: Vec<[[f64; LANES]; 3]>,
+}
+
+impl Scratch {
+    pub(crate) fn new(k0: usize) -> Self {
+        Self {
+            lanes: (0..LANES).map(|_| Lane::new(k0)).collect(),
+            side_by_side: Vec::with_capacity(k0),
+        }
+    }
+}
+
+/// The buffers of one point.
+struct Lane {
     /// Neighbours relative to the query point, in `f64`.
     local: Vec<[f64; 3]>,
     /// Moments of each scale's neighbourhood, smallest scale first.
@@ -49,8 +71,8 @@ pub(crate) struct Scratch {
     batch: Batch,
 }
 
-impl Scratch {
-    pub(crate) fn new(k0: usize) -> Self {
+impl Lane {
+    fn new(k0: usize) -> Self {
         Self {
             local: Vec::with_capacity(k0),
             prefix: Vec::new(),
@@ -87,8 +109,6 @@ struct Batch {
     frames: Vec<Frame>,
     /// The upper and lower set of each scale, with their variances.
     sides: Vec<[(Moments, [f64; 3]); 2]>,
-    /// The points of the upper set being summed.
-    upper: Vec<[f64; 3]>,
 }
 
 impl Batch {
@@ -117,19 +137,10 @@ impl Moments {
         self.outer.add_outer(q);
     }
 
-    /// The moments of `pts`.
+    /// The moments of the points of `pts` whose bits are set in `chosen`, in order.
     ///
-    /// Never inlined: inside the large `point_features` the accumulators were kept on
+    /// Never inlined: inside the large per-point code the accumulators were kept on
     /// the stack, putting a store-to-load round trip into every addition's chain.
-    #[inline(never)]
-    fn of(pts: impl Iterator<Item = [f64; 3]>) -> Self {
-        let mut m = Self::default();
-        pts.for_each(|q| m.add(q));
-        m
-    }
-
-    /// The moments of the points of `pts` whose bits are set in `chosen`, in order (not
-    /// inlined, like [`of`](Self::of)).
     #[inline(never)]
     fn of_chosen(pts: &[[f64; 3]], chosen: &[u64]) -> Self {
         let mut m = Self::default();
@@ -143,7 +154,7 @@ impl Moments {
         m
     }
 
-    /// Adds `pts`, in order (not inlined, like [`of`](Self::of)).
+    /// Adds `pts`, in order (not inlined, like [`of_chosen`](Self::of_chosen)).
     #[inline(never)]
     fn extend(&mut self, pts: &[[f64; 3]]) {
         let mut m = *self;
@@ -198,56 +209,200 @@ impl Moments {
     }
 }
 
-/// Writes the selected features of every scale for the point `neighbours[0]`, whose
-/// `k0` sorted neighbours are `neighbours`, into `out` (scales x selected values).
-pub(crate) fn point_features(
+/// Writes the selected features of every scale of up to [`LANES`] points into `out`
+/// (points x scales x selected values): each row of `k0` in `rows` holds one point's
+/// sorted neighbours, the point itself first.
+pub(crate) fn group_features(
     points: &[[f32; 3]],
-    neighbours: &[u32],
+    rows: &[u32],
     config: &FeatureConfig,
     scratch: &mut Scratch,
     out: &mut [f32],
 ) {
-    // Centre on the query point in f64: small, well-conditioned coordinates.
-    let p = points[neighbours[0] as usize].map(f64::from);
-    scratch.local.clear();
-    scratch.local.extend(neighbours.iter().map(|&j| {
-        let q = points[j as usize];
-        [0, 1, 2].map(|a| f64::from(q[a]) - p[a])
-    }));
-    let local = &scratch.local;
-    // Moments of every scale from one pass: scales are prefixes, smallest first.
-    scratch.prefix.clear();
-    let mut running = Moments::default();
-    for &k in config.scales.iter().rev() {
-        running.extend(&local[running.n..k]);
-        scratch.prefix.push(running);
+    let k0 = config.largest_scale();
+    let count = rows.len() / k0;
+    debug_assert!((1..=LANES).contains(&count));
+    for (lane, neighbours) in scratch.lanes.iter_mut().zip(rows.chunks_exact(k0)) {
+        lane.frames(points, neighbours, config);
     }
-    // Two batches of eigen problems (see `eigenvalues_batch`): each scale's covariance
-    // and its half neighbourhood's give the frames; then the upper and lower set of
-    // every scale, which need the frames' normals.
-    let batch = &mut scratch.batch;
-    let scales = config
-        .scales
-        .iter()
-        .copied()
-        .zip(scratch.prefix.iter().rev());
-    frames(local, scales.clone(), &mut scratch.near_centroid, batch);
-    sides(local, scales.clone(), batch);
-    let (m0, f0) = (&scratch.prefix[config.scales.len() - 1], &batch.frames[0]);
-    let per_scale = out.chunks_exact_mut(config.features_per_scale());
-    for (i, ((_, moments), out)) in scales.zip(per_scale).enumerate() {
-        let frame = &batch.frames[i];
-        let mut all = scale_features(frame, &batch.sides[i]);
-        if i > 0 {
-            // c: this scale's centroid against the rest of the k0 neighbourhood,
-            // in the k0 frame.
-            let rest = m0.minus(moments).mean();
-            let c = [0, 1, 2].map(|a| (frame.mean[a] - rest[a]) * f0.scale);
-            [all[13], all[14]] = split(c, f0.normal);
+    upper_sets(scratch, count, config);
+    let per_point = out.chunks_exact_mut(config.features_per_point());
+    for (lane, out) in scratch.lanes.iter_mut().zip(per_point) {
+        lane.finish(config, out);
+    }
+}
+
+impl Lane {
+    /// The point's neighbours, their prefix moments and every scale's frame.
+    fn frames(&mut self, points: &[[f32; 3]], neighbours: &[u32], config: &FeatureConfig) {
+        // Centre on the query point in f64: small, well-conditioned coordinates.
+        let p = points[neighbours[0] as usize].map(f64::from);
+        self.local.clear();
+        self.local.extend(neighbours.iter().map(|&j| {
+            let q = points[j as usize];
+            [0, 1, 2].map(|a| f64::from(q[a]) - p[a])
+        }));
+        // Moments of every scale from one pass: scales are prefixes, smallest first.
+        self.prefix.clear();
+        let mut running = Moments::default();
+        for &k in config.scales.iter().rev() {
+            running.extend(&self.local[running.n..k]);
+            self.prefix.push(running);
         }
-        for (o, i) in out.iter_mut().zip(config.groups.selected()) {
-            *o = all[i] as f32;
+        // Two batches of eigen problems (see `eigenvalues_batch`): each scale's
+        // covariance and its half neighbourhood's give the frames; then (`finish`) the
+        // upper and lower set of every scale, which need the frames' normals.
+        let scales = config.scales.iter().copied().zip(self.prefix.iter().rev());
+        frames(
+            &self.local,
+            scales,
+            &mut self.near_centroid,
+            &mut self.batch,
+        );
+    }
+
+    /// The features, once `batch.sides` holds every scale's upper and lower set.
+    fn finish(&mut self, config: &FeatureConfig, out: &mut [f32]) {
+        let batch = &mut self.batch;
+        side_variances(batch);
+        let scales = config.scales.iter().zip(self.prefix.iter().rev());
+        let (m0, f0) = (&self.prefix[config.scales.len() - 1], &batch.frames[0]);
+        let per_scale = out.chunks_exact_mut(config.features_per_scale());
+        for (i, ((_, moments), out)) in scales.zip(per_scale).enumerate() {
+            let frame = &batch.frames[i];
+            let mut all = scale_features(frame, &batch.sides[i]);
+            if i > 0 {
+                // c: this scale's centroid against the rest of the k0 neighbourhood,
+                // in the k0 frame.
+                let rest = m0.minus(moments).mean();
+                let c = [0, 1, 2].map(|a| (frame.mean[a] - rest[a]) * f0.scale);
+                [all[13], all[14]] = split(c, f0.normal);
+            }
+            for (o, i) in out.iter_mut().zip(config.groups.selected()) {
+                *o = all[i] as f32;
+            }
         }
+    }
+}
+
+/// Every scale's upper and lower set of the first `count` lanes into their
+/// `batch.sides`, the lanes side by side: U holds the points with `<q - m, n> >= 0`
+/// in the scale's frame (the sign of `<q^, n>`, as the scale factor is positive), L
+/// the rest, so its moments are the whole set's minus U's.
+fn upper_sets(scratch: &mut Scratch, count: usize, config: &FeatureConfig) {
+    let lanes = &mut scratch.lanes[..count];
+    let k0 = config.largest_scale();
+    let xyz = &mut scratch.side_by_side;
+    xyz.clear();
+    xyz.resize(k0, [[0.0; LANES]; 3]);
+    for (l, lane) in lanes.iter().enumerate() {
+        for (x, q) in xyz.iter_mut().zip(&lane.local) {
+            for (x, c) in x.iter_mut().zip(q) {
+                x[l] = *c;
+            }
+        }
+    }
+    for lane in lanes.iter_mut() {
+        lane.batch.sides.clear();
+    }
+    for (i, &k) in config.scales.iter().enumerate() {
+        let mut normal = [[0.0; LANES]; 3];
+        let mut threshold = [0.0; LANES];
+        for (l, lane) in lanes.iter().enumerate() {
+            let f = &lane.batch.frames[i];
+            for (n, c) in normal.iter_mut().zip(f.normal) {
+                n[l] = c;
+            }
+            // <q - m, n> >= 0  <=>  <q, n> >= <m, n>
+            threshold[l] = dot(f.mean, f.normal);
+        }
+        let upper = pulp::Arch::new().dispatch(UpperSums {
+            xyz: &xyz[..k],
+            normal,
+            threshold,
+        });
+        for (lane, upper) in lanes.iter_mut().zip(upper) {
+            let m = &lane.prefix[config.scales.len() - 1 - i];
+            let pair = [(upper, [0.0; 3]), (m.minus(&upper), [0.0; 3])];
+            lane.batch.sides.push(pair);
+        }
+    }
+}
+
+/// The moments of the upper sets U (see [`upper_sets`]) of [`LANES`] points side by
+/// side, a point per lane: each lane gets the sums of [`Moments::add`] over its U in
+/// order, so the same bits as one point at a time. `pulp` compiles it for AVX-512 /
+/// AVX2 registers (a lane per `f64`: one register for the eight points with AVX-512).
+struct UpperSums<'a> {
+    xyz: &'a [[[f64; LANES]; 3]],
+    normal: [[f64; LANES]; 3],
+    threshold: [f64; LANES],
+}
+
+impl pulp::WithSimd for UpperSums<'_> {
+    type Output = [Moments; LANES];
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> [Moments; LANES] {
+        let Self {
+            xyz,
+            normal: [nx, ny, nz],
+            threshold,
+        } = self;
+        fn registers<S: pulp::Simd>(v: &[f64; LANES]) -> &[S::f64s] {
+            S::as_simd_f64s(v).0
+        }
+        let registers = registers::<S>;
+        let (nx, ny, nz, t) = (
+            registers(&nx),
+            registers(&ny),
+            registers(&nz),
+            registers(&threshold),
+        );
+        let one = simd.splat_f64s(1.0);
+        // Count, sum and outer products, lane by lane: `Moments::add`'s sums in order,
+        // each addition kept only where the point is in U, so the same bits.
+        let mut acc = [[0.0; LANES]; 10];
+        for xyz in xyz {
+            let [x, y, z] = [0, 1, 2].map(|a| registers(&xyz[a]));
+            for r in 0..x.len() {
+                let (x, y, z) = (x[r], y[r], z[r]);
+                let along = simd.add_f64s(
+                    simd.add_f64s(simd.mul_f64s(x, nx[r]), simd.mul_f64s(y, ny[r])),
+                    simd.mul_f64s(z, nz[r]),
+                );
+                let up = simd.greater_than_or_equal_f64s(along, t[r]);
+                let mul = |a, b| simd.mul_f64s(a, b);
+                let values = [
+                    one,
+                    x,
+                    y,
+                    z,
+                    mul(x, x),
+                    mul(x, y),
+                    mul(x, z),
+                    mul(y, y),
+                    mul(y, z),
+                    mul(z, z),
+                ];
+                for (acc, v) in acc.iter_mut().zip(values) {
+                    let acc = &mut S::as_mut_simd_f64s(acc).0[r];
+                    *acc = simd.select_f64s(up, simd.add_f64s(*acc, v), *acc);
+                }
+            }
+        }
+        std::array::from_fn(|l| Moments {
+            n: acc[0][l] as usize,
+            sum: [acc[1][l], acc[2][l], acc[3][l]],
+            outer: Sym3 {
+                xx: acc[4][l],
+                xy: acc[5][l],
+                xz: acc[6][l],
+                yy: acc[7][l],
+                yz: acc[8][l],
+                zz: acc[9][l],
+            },
+        })
     }
 }
 
@@ -281,20 +436,9 @@ fn frames<'a>(
     }
 }
 
-/// Each scale's upper and lower set, with their variances, into `batch.sides`.
-fn sides<'a>(
-    local: &[[f64; 3]],
-    scales: impl Iterator<Item = (usize, &'a Moments)>,
-    batch: &mut Batch,
-) {
-    batch.sides.clear();
-    for ((k, m), f) in scales.zip(&batch.frames) {
-        let upper = upper_set(&local[..k], f, &mut batch.upper);
-        batch
-            .sides
-            .push([(upper, [0.0; 3]), (m.minus(&upper), [0.0; 3])]);
-    }
-    // One batch: all upper sets, then all lower sets.
+/// The variances of every scale's upper and lower set in `batch.sides`, one batch.
+fn side_variances(batch: &mut Batch) {
+    // All upper sets, then all lower sets.
     batch.matrices.clear();
     for side in 0..2 {
         let sets = batch.sides.iter().map(|s| s[side].0.covariance());
@@ -396,23 +540,6 @@ pub(crate) fn orient(n: [f64; 3], s: [f64; 3]) -> [f64; 3] {
     }
 }
 
-/// The points of `pts` in the upper set U of frame `f`: `<p - m, n> >= 0` (the sign of
-/// `<p^, n>`, as the scale factor is positive). L holds the rest, so its moments are
-/// the whole set's minus U's.
-fn upper_set(pts: &[[f64; 3]], f: &Frame, kept: &mut Vec<[f64; 3]>) -> Moments {
-    // <q - m, n> >= 0  <=>  <q, n> >= <m, n>
-    let threshold = dot(f.mean, f.normal);
-    // Compacted without a branch (always write, advance on keep): on real clouds the
-    // side of a point is unpredictable.
-    kept.resize(pts.len(), [0.0; 3]);
-    let mut n = 0;
-    for &q in pts {
-        kept[n] = q;
-        n += usize::from(dot(q, f.normal) >= threshold);
-    }
-    Moments::of(kept[..n].iter().copied())
-}
-
 /// The 15 values of one scale (all groups, `c` left at 0) in the normalised frame `f`,
 /// from the upper and lower sets with their variances.
 fn scale_features(f: &Frame, [upper, lower]: &[(Moments, [f64; 3]); 2]) -> [f64; ALL_FEATURES] {
@@ -447,6 +574,59 @@ fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    impl Moments {
+        /// The moments of `pts`, one point at a time.
+        fn of(pts: impl Iterator<Item = [f64; 3]>) -> Self {
+            let mut m = Self::default();
+            pts.for_each(|q| m.add(q));
+            m
+        }
+    }
+
+    #[test]
+    fn upper_sums_side_by_side_match_one_point_at_a_time() {
+        // Irregular points and frames per lane, including points exactly on a plane
+        // (the ">=" side) and lanes whose frame keeps every point or none.
+        let k = 45;
+        let xyz: Vec<[[f64; LANES]; 3]> = (0..k)
+            .map(|j| {
+                let t = |l: usize, a: usize| ((j * 7 + l * 13 + a * 5) as f64 * 0.731).sin();
+                let mut q = [0, 1, 2].map(|a| std::array::from_fn(|l| t(l, a)));
+                q[2][0] = 0.25;
+                q
+            })
+            .collect();
+        let mut normal = [[0.0; LANES]; 3];
+        let mut threshold = [0.0; LANES];
+        for l in 0..LANES {
+            let n = [0.3 + l as f64, -0.2, 1.0 - 0.1 * l as f64];
+            let len = dot(n, n).sqrt();
+            for a in 0..3 {
+                normal[a][l] = n[a] / len;
+            }
+            threshold[l] = 0.05 * l as f64 - 0.1;
+        }
+        (normal[0][0], normal[1][0], normal[2][0], threshold[0]) = (0.0, 0.0, 1.0, 0.25);
+        threshold[6] = 10.0;
+        threshold[7] = -10.0;
+        let got = pulp::Arch::new().dispatch(UpperSums {
+            xyz: &xyz,
+            normal,
+            threshold,
+        });
+        for (l, got) in got.iter().enumerate() {
+            let n = normal.map(|c| c[l]);
+            let points = xyz.iter().map(|q| q.map(|c| c[l]));
+            let want = Moments::of(points.filter(|&q| dot(q, n) >= threshold[l]));
+            assert_eq!(
+                (got.n, got.sum, got.outer),
+                (want.n, want.sum, want.outer),
+                "lane {l}"
+            );
+        }
+        assert_eq!((got[6].n, got[7].n), (0, k));
+    }
 
     #[test]
     fn nearest_half_breaks_ties_by_rank() {
