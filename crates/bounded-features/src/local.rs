@@ -1,101 +1,71 @@
-//! The statistics of one point's nested neighbourhoods (SPEC.md, "Features").
+//! The statistics of a point's nested neighbourhoods (SPEC.md, "Features"), eight
+//! points at a time.
 //!
-//! Performance notes (k0 = 128, 4 scales; shares of the whole extraction):
+//! Performance notes (k0 = 128, 4 scales, 1M-point test cube, `detect`):
+//! - every sum over neighbours (each scale's moments, half neighbourhood and upper
+//!   set) runs for eight points side by side, a point per vector lane: with AVX-512
+//!   one register holds a sum for all eight, and a lane adds only where its point
+//!   belongs, so each lane's sums are the one-point sums in the same order, bit for
+//!   bit. Against one point at a time (scalar sums of compacted sets, which had beaten
+//!   branching on real scans): 1.43 -> 1.25 s. `pulp` compiles the sums for AVX-512,
+//!   AVX2 or plain registers; what they call must be inlined (`array::map` with an
+//!   intrinsic inside was not, and cost 2x);
 //! - the 16 eigen problems of a point are solved in two batches of 8 (each scale's
 //!   covariance and half-neighbourhood covariance, then each scale's upper and lower
-//!   set), so their long dependency chains overlap: 9% less time for `detect` than
-//!   one at a time, with bit-identical results;
-//! - the moment sums (~12%) run in small functions that are never inlined: inlined into
-//!   `point_features` their accumulators lived on the stack (~6%);
-//! - the normal's half-neighbourhood selection works on single `u64` keys (distance
-//!   bits with the rank in the low bits) rather than on (distance, rank) pairs (~3%),
-//!   with [`SmallestFirst`]: a branch-free quickselect instead of
-//!   `select_nth_unstable` (~8%), and AVX-512 sorting networks where the CPU has
-//!   them (another ~4%), which mark the half's ranks as bits by comparing every key
-//!   with the half's largest (~2% over setting them key by key); the half is then
-//!   summed in rank order (from those bits, ~3%), so the features do not depend on
-//!   which selection ran; the
-//!   keys are computed by code compiled for AVX-512 / AVX2 where the CPU has them
-//!   (~2%); the same treatment did not pay for the neighbour gather and the upper-set
-//!   compaction, nor did summing moments in vector lanes, side by side, or in two
-//!   chains (the sets are short: dispatch and setup cost as much as they save);
-//! - the upper sets of eight points are summed side by side, a point per vector lane
-//!   (AVX-512: one register per sum for all eight), each lane adding only where its
-//!   point is in U: 6% faster on the 1M test cube than compacting each point's set
-//!   without a branch and summing it (which had beaten a branch on real scans, where
-//!   which side a neighbour lies on is unpredictable, and a zero weight per point);
+//!   set), so their long dependency chains overlap: 9% less time than one at a time;
+//! - the normal's half neighbourhood is found from single `u64` keys (distance bits
+//!   with the rank in the low bits): [`SmallestFirst`] gives the threshold key of the
+//!   smaller half (AVX-512 sorting networks where the CPU has them, else a branch-free
+//!   quickselect), and the sums keep the keys at or below it;
+//! - the neighbour gather reads the cloud in its own order: on the randomly ordered
+//!   test cube it is ~9% of the time, bound by cache misses; prefetching the next
+//!   group's neighbours, and (with the kNN giving positions) reading the index's
+//!   Morton-ordered copy instead, measured no faster;
 //! - tried, did not pay: two accumulator sets per sum, summing one point's k
 //!   neighbours eight at a time with lane masks (40% slower even with AVX-512),
-//!   sorting instead of selecting small half-neighbourhoods, and (in `bounded-geom`)
-//!   rows ordered only by scale bands instead of fully sorted, as the selections that
-//!   replace the sort cost as much and the half-neighbourhood selection is slower on
-//!   unsorted rows.
+//!   sorting instead of selecting small half neighbourhoods, and (in `bounded-geom`)
+//!   rows ordered only by scale bands instead of fully sorted.
 
 use bounded_geom::{Eigen3, SmallestFirst, Sym3, dot, eigenvalues_batch};
+use pulp::Simd;
 
 use crate::FeatureConfig;
 
 /// Values per scale with every group on (see `config::NAMES`).
 pub(crate) const ALL_FEATURES: usize = 15;
 
-/// Points processed side by side: their upper sets are summed in one pass, a point per
-/// vector lane.
+/// Points computed side by side, one per vector lane.
 pub(crate) const LANES: usize = 8;
+
+/// One value per lane.
+type Lanes = [f64; LANES];
 
 /// Per-thread buffers, reused from group to group so the hot loop never allocates.
 pub(crate) struct Scratch {
-    /// One point's buffers per lane.
-    lanes: Vec<Lane>,
-    /// The lanes' neighbours side by side: `[neighbour][axis][lane]`.
-    side_by_side: Vec<[[f64; LANES]; 3]>,
+    /// The group's neighbours relative to their query points, in `f64`, side by side:
+    /// `[neighbour][axis][lane]`.
+    xyz: Vec<[Lanes; 3]>,
+    /// Each scale's moments per lane, largest scale first.
+    prefix: Vec<[Moments; LANES]>,
+    /// The moments of each scale's half neighbourhood per lane, largest scale first.
+    half: Vec<[Moments; LANES]>,
+    /// Each lane's keys of a half neighbourhood's candidates.
+    keys: Vec<Vec<u64>>,
+    /// The selection of the half neighbourhoods.
+    select: SmallestFirst,
+    /// Each lane's eigen problems.
+    batches: Vec<Batch>,
 }
 
 impl Scratch {
     pub(crate) fn new(k0: usize) -> Self {
         Self {
-            lanes: (0..LANES).map(|_| Lane::new(k0)).collect(),
-            side_by_side: Vec::with_capacity(k0),
-        }
-    }
-}
-
-/// The buffers of one point.
-struct Lane {
-    /// Neighbours relative to the query point, in `f64`.
-    local: Vec<[f64; 3]>,
-    /// Moments of each scale's neighbourhood, smallest scale first.
-    prefix: Vec<Moments>,
-    /// The selection of the normal's half neighbourhood.
-    near_centroid: NearCentroid,
-    /// The eigen problems of a point, solved in batches.
-    batch: Batch,
-}
-
-impl Lane {
-    fn new(k0: usize) -> Self {
-        Self {
-            local: Vec::with_capacity(k0),
+            xyz: Vec::with_capacity(k0),
             prefix: Vec::new(),
-            near_centroid: NearCentroid::new(),
-            batch: Batch::default(),
-        }
-    }
-}
-
-/// Keys (squared distance to the centroid, rank) of a half neighbourhood's candidates,
-/// the selection that finds the smaller half, and the chosen ranks as bits.
-struct NearCentroid {
-    keys: Vec<u64>,
-    select: SmallestFirst,
-    chosen: Vec<u64>,
-}
-
-impl NearCentroid {
-    fn new() -> Self {
-        Self {
-            keys: Vec::new(),
+            half: Vec::new(),
+            keys: (0..LANES).map(|_| Vec::with_capacity(k0)).collect(),
             select: SmallestFirst::new(),
-            chosen: Vec::new(),
+            batches: (0..LANES).map(|_| Batch::default()).collect(),
         }
     }
 }
@@ -129,39 +99,6 @@ struct Moments {
 }
 
 impl Moments {
-    fn add(&mut self, q: [f64; 3]) {
-        self.n += 1;
-        for (s, c) in self.sum.iter_mut().zip(q) {
-            *s += c;
-        }
-        self.outer.add_outer(q);
-    }
-
-    /// The moments of the points of `pts` whose bits are set in `chosen`, in order.
-    ///
-    /// Never inlined: inside the large per-point code the accumulators were kept on
-    /// the stack, putting a store-to-load round trip into every addition's chain.
-    #[inline(never)]
-    fn of_chosen(pts: &[[f64; 3]], chosen: &[u64]) -> Self {
-        let mut m = Self::default();
-        for (w, &word) in chosen.iter().enumerate() {
-            let mut bits = word;
-            while bits != 0 {
-                m.add(pts[w * 64 + bits.trailing_zeros() as usize]);
-                bits &= bits - 1;
-            }
-        }
-        m
-    }
-
-    /// Adds `pts`, in order (not inlined, like [`of_chosen`](Self::of_chosen)).
-    #[inline(never)]
-    fn extend(&mut self, pts: &[[f64; 3]]) {
-        let mut m = *self;
-        pts.iter().for_each(|&q| m.add(q));
-        *self = m;
-    }
-
     /// The moments of the points in `self` but not in `part`.
     fn minus(&self, part: &Self) -> Self {
         let (a, b) = (&self.outer, &part.outer);
@@ -222,218 +159,399 @@ pub(crate) fn group_features(
     let k0 = config.largest_scale();
     let count = rows.len() / k0;
     debug_assert!((1..=LANES).contains(&count));
-    for (lane, neighbours) in scratch.lanes.iter_mut().zip(rows.chunks_exact(k0)) {
-        lane.frames(points, neighbours, config);
+    gather(points, rows, k0, &mut scratch.xyz);
+    let xyz = &scratch.xyz;
+    let arch = pulp::Arch::new();
+    // Moments of every scale from one pass: scales are prefixes, smallest first.
+    scratch.prefix.clear();
+    scratch
+        .prefix
+        .resize(config.scales.len(), [Moments::default(); LANES]);
+    arch.dispatch(PrefixSums {
+        xyz,
+        scales: &config.scales,
+        out: &mut scratch.prefix,
+    });
+    scratch.half.clear();
+    for (&k, prefix) in config.scales.iter().zip(&scratch.prefix) {
+        let (keys, select) = (&mut scratch.keys, &mut scratch.select);
+        let half = half_neighbourhoods(arch, &xyz[..k], prefix, count, keys, select);
+        scratch.half.push(half);
     }
-    upper_sets(scratch, count, config);
+    // Two batches of eigen problems per point (see `eigenvalues_batch`): each scale's
+    // covariance and its half neighbourhood's give the frames; then the upper and
+    // lower set of every scale, which need the frames' normals.
+    for (l, batch) in scratch.batches[..count].iter_mut().enumerate() {
+        let prefix = scratch.prefix.iter().map(|m| &m[l]);
+        let half = scratch.half.iter().map(|m| &m[l]);
+        frames(&config.scales, prefix, half, batch);
+    }
+    upper_sets(arch, scratch, count, config);
     let per_point = out.chunks_exact_mut(config.features_per_point());
-    for (lane, out) in scratch.lanes.iter_mut().zip(per_point) {
-        lane.finish(config, out);
+    for (l, (batch, out)) in scratch.batches.iter_mut().zip(per_point).enumerate() {
+        side_variances(batch);
+        point_values(config, scratch.prefix.iter().map(|m| &m[l]), batch, out);
     }
 }
 
-impl Lane {
-    /// The point's neighbours, their prefix moments and every scale's frame.
-    fn frames(&mut self, points: &[[f32; 3]], neighbours: &[u32], config: &FeatureConfig) {
-        // Centre on the query point in f64: small, well-conditioned coordinates.
-        let p = points[neighbours[0] as usize].map(f64::from);
-        self.local.clear();
-        self.local.extend(neighbours.iter().map(|&j| {
+/// The neighbours of each row of `rows` (`k0` each, the query point first) relative to
+/// their query point, in `f64` (small, well-conditioned coordinates), side by side in
+/// `xyz`; lanes without a row hold zeros.
+fn gather(points: &[[f32; 3]], rows: &[u32], k0: usize, xyz: &mut Vec<[Lanes; 3]>) {
+    xyz.clear();
+    xyz.resize(k0, [[0.0; LANES]; 3]);
+    for (l, row) in rows.chunks_exact(k0).enumerate() {
+        let p = points[row[0] as usize].map(f64::from);
+        for (x, &j) in xyz.iter_mut().zip(row) {
             let q = points[j as usize];
-            [0, 1, 2].map(|a| f64::from(q[a]) - p[a])
-        }));
-        // Moments of every scale from one pass: scales are prefixes, smallest first.
-        self.prefix.clear();
-        let mut running = Moments::default();
-        for &k in config.scales.iter().rev() {
-            running.extend(&self.local[running.n..k]);
-            self.prefix.push(running);
+            for a in 0..3 {
+                x[a][l] = f64::from(q[a]) - p[a];
+            }
         }
-        // Two batches of eigen problems (see `eigenvalues_batch`): each scale's
-        // covariance and its half neighbourhood's give the frames; then (`finish`) the
-        // upper and lower set of every scale, which need the frames' normals.
-        let scales = config.scales.iter().copied().zip(self.prefix.iter().rev());
-        frames(
-            &self.local,
-            scales,
-            &mut self.near_centroid,
-            &mut self.batch,
-        );
     }
+}
 
-    /// The features, once `batch.sides` holds every scale's upper and lower set.
-    fn finish(&mut self, config: &FeatureConfig, out: &mut [f32]) {
-        let batch = &mut self.batch;
-        side_variances(batch);
-        let scales = config.scales.iter().zip(self.prefix.iter().rev());
-        let (m0, f0) = (&self.prefix[config.scales.len() - 1], &batch.frames[0]);
-        let per_scale = out.chunks_exact_mut(config.features_per_scale());
-        for (i, ((_, moments), out)) in scales.zip(per_scale).enumerate() {
-            let frame = &batch.frames[i];
-            let mut all = scale_features(frame, &batch.sides[i]);
-            if i > 0 {
-                // c: this scale's centroid against the rest of the k0 neighbourhood,
-                // in the k0 frame.
-                let rest = m0.minus(moments).mean();
-                let c = [0, 1, 2].map(|a| (frame.mean[a] - rest[a]) * f0.scale);
-                [all[13], all[14]] = split(c, f0.normal);
-            }
-            for (o, i) in out.iter_mut().zip(config.groups.selected()) {
-                *o = all[i] as f32;
-            }
+/// The features of one point from its scales' moments (largest scale first) and its
+/// batch's frames and sides.
+fn point_values<'a>(
+    config: &FeatureConfig,
+    prefix: impl Iterator<Item = &'a Moments> + Clone,
+    batch: &Batch,
+    out: &mut [f32],
+) {
+    let Some(m0) = prefix.clone().next() else {
+        return;
+    };
+    let f0 = &batch.frames[0];
+    let per_scale = out.chunks_exact_mut(config.features_per_scale());
+    for (i, (moments, out)) in prefix.zip(per_scale).enumerate() {
+        let frame = &batch.frames[i];
+        let mut all = scale_features(frame, &batch.sides[i]);
+        if i > 0 {
+            // c: this scale's centroid against the rest of the k0 neighbourhood,
+            // in the k0 frame.
+            let rest = m0.minus(moments).mean();
+            let c = [0, 1, 2].map(|a| (frame.mean[a] - rest[a]) * f0.scale);
+            [all[13], all[14]] = split(c, f0.normal);
         }
+        for (o, i) in out.iter_mut().zip(config.groups.selected()) {
+            *o = all[i] as f32;
+        }
+    }
+}
+
+/// The moments of the `floor(k/2)` of each lane's `k` points `xyz` closest to the lane's
+/// centroid (from `prefix`), ties by rank; zeros for `k < 2`.
+///
+/// A key per point: the squared distance's `f64` bits (non-negative, so they order like
+/// the values) with the rank in the lowest bits (a relative 2^-45 at k = 128), so
+/// distances equal to that precision tie by rank. The selection gives each lane's
+/// threshold key, the half is the keys at or below it, and it is summed in rank
+/// order, whichever selection ran, so the sums are the same on every CPU.
+fn half_neighbourhoods(
+    arch: pulp::Arch,
+    xyz: &[[Lanes; 3]],
+    prefix: &[Moments; LANES],
+    count: usize,
+    keys: &mut [Vec<u64>],
+    select: &mut SmallestFirst,
+) -> [Moments; LANES] {
+    let k = xyz.len();
+    if k / 2 == 0 {
+        return [Moments::default(); LANES];
+    }
+    let mut centre = [[0.0; LANES]; 3];
+    for (l, m) in prefix.iter().enumerate() {
+        for (c, v) in centre.iter_mut().zip(m.mean()) {
+            c[l] = v;
+        }
+    }
+    let rank_bits = k.next_power_of_two() as u64 - 1;
+    arch.dispatch(Keys {
+        xyz,
+        centre,
+        rank_bits,
+        keys,
+    });
+    let mut threshold = [0; LANES];
+    for (t, keys) in threshold.iter_mut().zip(keys.iter()).take(count) {
+        *t = select.nth_smallest(&keys[..k], k / 2);
+    }
+    arch.dispatch(NearSums {
+        xyz,
+        centre,
+        rank_bits,
+        threshold,
+    })
+}
+
+/// Each scale's frame into `batch.frames`, from the scales' sizes, moments and half
+/// neighbourhoods' moments, largest first.
+fn frames<'a>(
+    scales: &[usize],
+    prefix: impl Iterator<Item = &'a Moments> + Clone,
+    half: impl Iterator<Item = &'a Moments>,
+    batch: &mut Batch,
+) {
+    batch.matrices.clear();
+    batch
+        .matrices
+        .extend(prefix.clone().map(Moments::covariance));
+    let count = batch.matrices.len();
+    batch.matrices.extend(half.map(Moments::covariance));
+    batch.solve();
+    batch.frames.clear();
+    for (i, (&k, m)) in scales.iter().zip(prefix).enumerate() {
+        let j = count + i;
+        let half = (k / 2 > 0).then(|| batch.matrices[j].eigen_from(batch.values[j]));
+        let frame = frame(m, m.variances(batch.values[i]), half);
+        batch.frames.push(frame);
     }
 }
 
 /// Every scale's upper and lower set of the first `count` lanes into their
-/// `batch.sides`, the lanes side by side: U holds the points with `<q - m, n> >= 0`
-/// in the scale's frame (the sign of `<q^, n>`, as the scale factor is positive), L
-/// the rest, so its moments are the whole set's minus U's.
-fn upper_sets(scratch: &mut Scratch, count: usize, config: &FeatureConfig) {
-    let lanes = &mut scratch.lanes[..count];
-    let k0 = config.largest_scale();
-    let xyz = &mut scratch.side_by_side;
-    xyz.clear();
-    xyz.resize(k0, [[0.0; LANES]; 3]);
-    for (l, lane) in lanes.iter().enumerate() {
-        for (x, q) in xyz.iter_mut().zip(&lane.local) {
-            for (x, c) in x.iter_mut().zip(q) {
-                x[l] = *c;
-            }
-        }
+/// `batch.sides`: U holds the points with `<q - m, n> >= 0` in the scale's frame (the
+/// sign of `<q^, n>`, as the scale factor is positive), L the rest, so its moments are
+/// the whole set's minus U's.
+fn upper_sets(arch: pulp::Arch, scratch: &mut Scratch, count: usize, config: &FeatureConfig) {
+    let batches = &mut scratch.batches[..count];
+    for batch in batches.iter_mut() {
+        batch.sides.clear();
     }
-    for lane in lanes.iter_mut() {
-        lane.batch.sides.clear();
-    }
-    for (i, &k) in config.scales.iter().enumerate() {
+    for (i, (&k, prefix)) in config.scales.iter().zip(&scratch.prefix).enumerate() {
         let mut normal = [[0.0; LANES]; 3];
         let mut threshold = [0.0; LANES];
-        for (l, lane) in lanes.iter().enumerate() {
-            let f = &lane.batch.frames[i];
+        for (l, batch) in batches.iter().enumerate() {
+            let f = &batch.frames[i];
             for (n, c) in normal.iter_mut().zip(f.normal) {
                 n[l] = c;
             }
             // <q - m, n> >= 0  <=>  <q, n> >= <m, n>
             threshold[l] = dot(f.mean, f.normal);
         }
-        let upper = pulp::Arch::new().dispatch(UpperSums {
-            xyz: &xyz[..k],
+        let upper = arch.dispatch(UpperSums {
+            xyz: &scratch.xyz[..k],
             normal,
             threshold,
         });
-        for (lane, upper) in lanes.iter_mut().zip(upper) {
-            let m = &lane.prefix[config.scales.len() - 1 - i];
-            let pair = [(upper, [0.0; 3]), (m.minus(&upper), [0.0; 3])];
-            lane.batch.sides.push(pair);
+        for ((batch, upper), m) in batches.iter_mut().zip(upper).zip(prefix) {
+            batch
+                .sides
+                .push([(upper, [0.0; 3]), (m.minus(&upper), [0.0; 3])]);
         }
     }
 }
 
-/// The moments of the upper sets U (see [`upper_sets`]) of [`LANES`] points side by
-/// side, a point per lane: each lane gets the sums of [`Moments::add`] over its U in
-/// order, so the same bits as one point at a time. `pulp` compiles it for AVX-512 /
-/// AVX2 registers (a lane per `f64`: one register for the eight points with AVX-512).
+/// Each lane's moments of `xyz` at every scale (`scales` largest first, into `out` in
+/// that order): [`Moments::add`] over the points in order, the scales' moments taken on
+/// the way.
+struct PrefixSums<'a> {
+    xyz: &'a [[Lanes; 3]],
+    scales: &'a [usize],
+    out: &'a mut [[Moments; LANES]],
+}
+
+impl pulp::WithSimd for PrefixSums<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let Self { xyz, scales, out } = self;
+        let mut acc = [[0.0; LANES]; 10];
+        let mut at = scales.iter().zip(out.iter_mut()).rev().peekable();
+        for (j, xyz) in xyz.iter().enumerate() {
+            let [x, y, z] = [&xyz[0], &xyz[1], &xyz[2]].map(registers::<S>);
+            for r in 0..x.len() {
+                add_lanes(simd, &mut acc, r, [x[r], y[r], z[r]], None);
+            }
+            while let Some((_, out)) = at.next_if(|(k, _)| **k == j + 1) {
+                *out = moments(&acc);
+            }
+        }
+    }
+}
+
+/// The keys of [`half_neighbourhoods`] into `keys`: each lane's squared distances of
+/// `xyz` to its `centre`, the rank in the `rank_bits`.
+struct Keys<'a> {
+    xyz: &'a [[Lanes; 3]],
+    centre: [Lanes; 3],
+    rank_bits: u64,
+    keys: &'a mut [Vec<u64>],
+}
+
+impl pulp::WithSimd for Keys<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let Self {
+            xyz,
+            centre,
+            rank_bits,
+            keys,
+        } = self;
+        for keys in keys.iter_mut() {
+            keys.clear();
+            keys.resize(xyz.len(), 0);
+        }
+        let mut lanes = [0u64; LANES];
+        for (j, xyz) in xyz.iter().enumerate() {
+            let registers = S::as_mut_simd_u64s(&mut lanes).0;
+            for (r, out) in registers.iter_mut().enumerate() {
+                *out = near_key(simd, xyz, &centre, rank_bits, j, r);
+            }
+            for (keys, &key) in keys.iter_mut().zip(&lanes) {
+                keys[j] = key;
+            }
+        }
+    }
+}
+
+/// Each lane's moments of the points of `xyz` whose keys (see [`Keys`]) are at or below
+/// its `threshold`, in rank order.
+struct NearSums<'a> {
+    xyz: &'a [[Lanes; 3]],
+    centre: [Lanes; 3],
+    rank_bits: u64,
+    threshold: [u64; LANES],
+}
+
+impl pulp::WithSimd for NearSums<'_> {
+    type Output = [Moments; LANES];
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) -> [Moments; LANES] {
+        let Self {
+            xyz,
+            centre,
+            rank_bits,
+            threshold,
+        } = self;
+        let threshold = S::as_simd_u64s(&threshold).0;
+        let mut acc = [[0.0; LANES]; 10];
+        for (j, xyz) in xyz.iter().enumerate() {
+            let [x, y, z] = [&xyz[0], &xyz[1], &xyz[2]].map(registers::<S>);
+            for r in 0..x.len() {
+                let key = near_key(simd, xyz, &centre, rank_bits, j, r);
+                let near = simd.less_than_or_equal_u64s(key, threshold[r]);
+                add_lanes(simd, &mut acc, r, [x[r], y[r], z[r]], Some(near));
+            }
+        }
+        moments(&acc)
+    }
+}
+
+/// The moments of the upper sets U (see [`upper_sets`]) of the lanes' points `xyz`.
 struct UpperSums<'a> {
-    xyz: &'a [[[f64; LANES]; 3]],
-    normal: [[f64; LANES]; 3],
-    threshold: [f64; LANES],
+    xyz: &'a [[Lanes; 3]],
+    normal: [Lanes; 3],
+    threshold: Lanes,
 }
 
 impl pulp::WithSimd for UpperSums<'_> {
     type Output = [Moments; LANES];
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, simd: S) -> [Moments; LANES] {
+    fn with_simd<S: Simd>(self, simd: S) -> [Moments; LANES] {
         let Self {
             xyz,
-            normal: [nx, ny, nz],
+            normal,
             threshold,
         } = self;
-        fn registers<S: pulp::Simd>(v: &[f64; LANES]) -> &[S::f64s] {
-            S::as_simd_f64s(v).0
-        }
-        let registers = registers::<S>;
-        let (nx, ny, nz, t) = (
-            registers(&nx),
-            registers(&ny),
-            registers(&nz),
-            registers(&threshold),
-        );
-        let one = simd.splat_f64s(1.0);
-        // Count, sum and outer products, lane by lane: `Moments::add`'s sums in order,
-        // each addition kept only where the point is in U, so the same bits.
+        let [nx, ny, nz] = [&normal[0], &normal[1], &normal[2]].map(registers::<S>);
+        let t = registers::<S>(&threshold);
         let mut acc = [[0.0; LANES]; 10];
         for xyz in xyz {
-            let [x, y, z] = [0, 1, 2].map(|a| registers(&xyz[a]));
+            let [x, y, z] = [&xyz[0], &xyz[1], &xyz[2]].map(registers::<S>);
             for r in 0..x.len() {
-                let (x, y, z) = (x[r], y[r], z[r]);
+                // <q, n> as `dot` computes it.
                 let along = simd.add_f64s(
-                    simd.add_f64s(simd.mul_f64s(x, nx[r]), simd.mul_f64s(y, ny[r])),
-                    simd.mul_f64s(z, nz[r]),
+                    simd.add_f64s(simd.mul_f64s(x[r], nx[r]), simd.mul_f64s(y[r], ny[r])),
+                    simd.mul_f64s(z[r], nz[r]),
                 );
                 let up = simd.greater_than_or_equal_f64s(along, t[r]);
-                let mul = |a, b| simd.mul_f64s(a, b);
-                let values = [
-                    one,
-                    x,
-                    y,
-                    z,
-                    mul(x, x),
-                    mul(x, y),
-                    mul(x, z),
-                    mul(y, y),
-                    mul(y, z),
-                    mul(z, z),
-                ];
-                for (acc, v) in acc.iter_mut().zip(values) {
-                    let acc = &mut S::as_mut_simd_f64s(acc).0[r];
-                    *acc = simd.select_f64s(up, simd.add_f64s(*acc, v), *acc);
-                }
+                add_lanes(simd, &mut acc, r, [x[r], y[r], z[r]], Some(up));
             }
         }
-        std::array::from_fn(|l| Moments {
-            n: acc[0][l] as usize,
-            sum: [acc[1][l], acc[2][l], acc[3][l]],
-            outer: Sym3 {
-                xx: acc[4][l],
-                xy: acc[5][l],
-                xz: acc[6][l],
-                yy: acc[7][l],
-                yz: acc[8][l],
-                zz: acc[9][l],
-            },
-        })
+        moments(&acc)
     }
 }
 
-/// Each scale's frame into `batch.frames`, from the scales' sizes and moments, largest
-/// first.
-fn frames<'a>(
-    local: &[[f64; 3]],
-    scales: impl Iterator<Item = (usize, &'a Moments)> + Clone,
-    near_centroid: &mut NearCentroid,
-    batch: &mut Batch,
+/// The lanes of `v` as registers of `S`.
+#[inline(always)]
+fn registers<S: Simd>(v: &Lanes) -> &[S::f64s] {
+    S::as_simd_f64s(v).0
+}
+
+/// Register `r` of the keys of [`Keys`] for the points `xyz` (the `j`-th of each lane):
+/// `dist2(q, centre)`'s bits, `rank_bits` replaced by `j`.
+#[inline(always)]
+fn near_key<S: Simd>(
+    simd: S,
+    xyz: &[Lanes; 3],
+    centre: &[Lanes; 3],
+    rank_bits: u64,
+    j: usize,
+    r: usize,
+) -> S::u64s {
+    // Axis by axis: `array::map` is not always inlined, and its intrinsics become calls.
+    let d = |a: usize| simd.sub_f64s(registers::<S>(&xyz[a])[r], registers::<S>(&centre[a])[r]);
+    let d = [d(0), d(1), d(2)];
+    let dist2 = simd.add_f64s(
+        simd.add_f64s(simd.mul_f64s(d[0], d[0]), simd.mul_f64s(d[1], d[1])),
+        simd.mul_f64s(d[2], d[2]),
+    );
+    let bits = simd.and_u64s(simd.transmute_u64s_f64s(dist2), simd.splat_u64s(!rank_bits));
+    simd.or_u64s(bits, simd.splat_u64s(j as u64))
+}
+
+/// Adds each lane's point `[x, y, z]` (register `r`) to its moments in `acc` (count,
+/// sums, outer products) where `keep` is set (everywhere for `None`): [`Moments::add`],
+/// lane by lane, so the same bits.
+#[inline(always)]
+fn add_lanes<S: Simd>(
+    simd: S,
+    acc: &mut [Lanes; 10],
+    r: usize,
+    [x, y, z]: [S::f64s; 3],
+    keep: Option<S::m64s>,
 ) {
-    batch.matrices.clear();
-    batch
-        .matrices
-        .extend(scales.clone().map(|(_, m)| m.covariance()));
-    let count = batch.matrices.len();
-    for (k, m) in scales.clone() {
-        batch.matrices.push(if k / 2 == 0 {
-            Sym3::default()
-        } else {
-            nearest_half(&local[..k], m.mean(), near_centroid).covariance()
-        });
+    let mul = |a, b| simd.mul_f64s(a, b);
+    let values = [
+        simd.splat_f64s(1.0),
+        x,
+        y,
+        z,
+        mul(x, x),
+        mul(x, y),
+        mul(x, z),
+        mul(y, y),
+        mul(y, z),
+        mul(z, z),
+    ];
+    for (acc, v) in acc.iter_mut().zip(values) {
+        let acc = &mut S::as_mut_simd_f64s(acc).0[r];
+        let sum = simd.add_f64s(*acc, v);
+        *acc = keep.map_or(sum, |keep| simd.select_f64s(keep, sum, *acc));
     }
-    batch.solve();
-    batch.frames.clear();
-    for (i, (k, m)) in scales.enumerate() {
-        let j = count + i;
-        let half = (k / 2 > 0).then(|| batch.matrices[j].eigen_from(batch.values[j]));
-        let frame = frame(m, m.variances(batch.values[i]), half);
-        batch.frames.push(frame);
-    }
+}
+
+/// The lanes' moments from the accumulators of [`add_lanes`].
+#[inline(always)]
+fn moments(acc: &[Lanes; 10]) -> [Moments; LANES] {
+    std::array::from_fn(|l| Moments {
+        n: acc[0][l] as usize,
+        sum: [acc[1][l], acc[2][l], acc[3][l]],
+        outer: Sym3 {
+            xx: acc[4][l],
+            xy: acc[5][l],
+            xz: acc[6][l],
+            yy: acc[7][l],
+            yz: acc[8][l],
+            zz: acc[9][l],
+        },
+    })
 }
 
 /// The variances of every scale's upper and lower set in `batch.sides`, one batch.
@@ -482,49 +600,6 @@ fn frame(moments: &Moments, variances: [f64; 3], half: Option<Eigen3>) -> Frame 
     }
 }
 
-/// Moments of the `floor(k/2)` of the `k` points `pts` closest to `m`, ties by rank.
-///
-/// Non-negative f64 bits order like the values; the rank replaces the lowest mantissa
-/// bits (a relative 2^-45 at k = 128), so one u64 is the whole key and distances
-/// equal to that precision tie by rank. The half is summed in rank order, whatever
-/// order the selection leaves it in, so the sums are the same on every CPU.
-fn nearest_half(pts: &[[f64; 3]], m: [f64; 3], near: &mut NearCentroid) -> Moments {
-    let keys = &mut near.keys;
-    let rank_bits = pts.len().next_power_of_two() as u64 - 1;
-    keys.clear();
-    keys.resize(pts.len(), 0);
-    pulp::Arch::new().dispatch(Keys {
-        pts,
-        m,
-        rank_bits,
-        keys,
-    });
-    near.select.mark(keys, pts.len() / 2, &mut near.chosen);
-    Moments::of_chosen(pts, &near.chosen)
-}
-
-/// The keys of [`nearest_half`]: each point's squared distance to `m`, its rank in the
-/// low bits. `pulp` compiles this for AVX-512 and AVX2 registers and runs it at the best
-/// level the CPU has (the same operations, so the same keys): ~2% of `detect` on the 1M
-/// test cube with AVX-512.
-struct Keys<'a> {
-    pts: &'a [[f64; 3]],
-    m: [f64; 3],
-    rank_bits: u64,
-    keys: &'a mut [u64],
-}
-
-impl pulp::NullaryFnOnce for Keys<'_> {
-    type Output = ();
-
-    #[inline(always)]
-    fn call(self) {
-        for ((k, q), j) in self.keys.iter_mut().zip(self.pts).zip(0u64..) {
-            *k = dist2(*q, self.m).to_bits() & !self.rank_bits | j;
-        }
-    }
-}
-
 /// Orients the unit normal `n` so that `<s, n> >= 0`, where `s = p_i - m` (the query
 /// point's offset from the centroid, same direction as `p^_i`).
 ///
@@ -565,17 +640,19 @@ fn split(v: [f64; 3], n: [f64; 3]) -> [f64; 2] {
     [along, dot(rest, rest).sqrt()]
 }
 
-#[inline(always)]
-fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    dot(d, d)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     impl Moments {
+        fn add(&mut self, q: [f64; 3]) {
+            self.n += 1;
+            for (s, c) in self.sum.iter_mut().zip(q) {
+                *s += c;
+            }
+            self.outer.add_outer(q);
+        }
+
         /// The moments of `pts`, one point at a time.
         fn of(pts: impl Iterator<Item = [f64; 3]>) -> Self {
             let mut m = Self::default();
@@ -584,19 +661,38 @@ mod tests {
         }
     }
 
-    #[test]
-    fn upper_sums_side_by_side_match_one_point_at_a_time() {
-        // Irregular points and frames per lane, including points exactly on a plane
-        // (the ">=" side) and lanes whose frame keeps every point or none.
-        let k = 45;
-        let xyz: Vec<[[f64; LANES]; 3]> = (0..k)
+    fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
+        let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        dot(d, d)
+    }
+
+    fn same(a: &Moments, b: &Moments) -> bool {
+        (a.n, a.sum, a.outer) == (b.n, b.sum, b.outer)
+    }
+
+    /// Lanes of `k` irregular points each, lane `l` its own cloud.
+    fn lanes(k: usize) -> Vec<[Lanes; 3]> {
+        (0..k)
             .map(|j| {
                 let t = |l: usize, a: usize| ((j * 7 + l * 13 + a * 5) as f64 * 0.731).sin();
-                let mut q = [0, 1, 2].map(|a| std::array::from_fn(|l| t(l, a)));
-                q[2][0] = 0.25;
-                q
+                [0, 1, 2].map(|a| std::array::from_fn(|l| t(l, a)))
             })
-            .collect();
+            .collect()
+    }
+
+    fn lane(xyz: &[[Lanes; 3]], l: usize) -> Vec<[f64; 3]> {
+        xyz.iter().map(|q| q.map(|c| c[l])).collect()
+    }
+
+    #[test]
+    fn upper_sums_side_by_side_match_one_point_at_a_time() {
+        // Points exactly on a plane (the ">=" side), and lanes whose frame keeps every
+        // point or none.
+        let k = 45;
+        let mut xyz = lanes(k);
+        for q in xyz.iter_mut() {
+            q[2][0] = 0.25;
+        }
         let mut normal = [[0.0; LANES]; 3];
         let mut threshold = [0.0; LANES];
         for l in 0..LANES {
@@ -617,62 +713,60 @@ mod tests {
         });
         for (l, got) in got.iter().enumerate() {
             let n = normal.map(|c| c[l]);
-            let points = xyz.iter().map(|q| q.map(|c| c[l]));
+            let points = lane(&xyz, l).into_iter();
             let want = Moments::of(points.filter(|&q| dot(q, n) >= threshold[l]));
-            assert_eq!(
-                (got.n, got.sum, got.outer),
-                (want.n, want.sum, want.outer),
-                "lane {l}"
-            );
+            assert!(same(got, &want), "lane {l}");
         }
         assert_eq!((got[6].n, got[7].n), (0, k));
     }
 
     #[test]
-    fn nearest_half_breaks_ties_by_rank() {
-        // A 7 x 7 integer grid (many exactly equal distances to the centre), in a
-        // scrambled order, and an odd count: brute force on (distance, rank) pairs.
-        let pts: Vec<[f64; 3]> = (0..49)
-            .map(|i| (i * 19) % 49)
-            .map(|i| [(i % 7) as f64, (i / 7) as f64, 0.5 * (i % 3) as f64])
-            .collect();
-        for (len, m) in [(49, [3.0, 3.0, 0.5]), (48, [0.0; 3]), (3, [1.0, 0.0, 0.0])] {
-            let pts = &pts[..len];
-            let mut want: Vec<(f64, usize)> = (0..len).map(|j| (dist2(pts[j], m), j)).collect();
-            want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let want = Moments::of(want[..len / 2].iter().map(|&(_, j)| pts[j]));
-            let got = nearest_half(pts, m, &mut NearCentroid::new());
-            assert_eq!((got.n, got.sum, got.outer), (want.n, want.sum, want.outer));
+    fn prefix_sums_match_one_point_at_a_time() {
+        let xyz = lanes(40);
+        let scales = [40, 23, 16, 1];
+        let mut out = vec![[Moments::default(); LANES]; scales.len()];
+        pulp::Arch::new().dispatch(PrefixSums {
+            xyz: &xyz,
+            scales: &scales,
+            out: &mut out,
+        });
+        for l in 0..LANES {
+            for (&k, got) in scales.iter().zip(&out) {
+                let want = Moments::of(lane(&xyz, l)[..k].iter().copied());
+                assert!(same(&got[l], &want), "lane {l} k {k}");
+            }
         }
     }
 
     #[test]
-    fn nearest_half_sums_in_rank_order() {
-        // Irregular coordinates: only the rank order gives these exact sums, whichever
-        // way (AVX-512 networks or quickselect) the half was found.
-        for k in [16, 45, 128] {
-            let pts: Vec<[f64; 3]> = (0..k)
-                .map(|i| {
-                    let t = i as f64 * 0.7318;
-                    [
-                        t.sin() * 1.37,
-                        (t * 1.91).cos() * 0.83,
-                        (t * 0.37).sin() * 0.11,
-                    ]
-                })
-                .collect();
-            let m = [0.1, -0.2, 0.05];
-            let mut ranked: Vec<(f64, usize)> = (0..k).map(|j| (dist2(pts[j], m), j)).collect();
-            ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let mut half: Vec<usize> = ranked[..k / 2].iter().map(|&(_, j)| j).collect();
-            half.sort_unstable();
-            let want = Moments::of(half.iter().map(|&j| pts[j]));
-            let got = nearest_half(&pts, m, &mut NearCentroid::new());
-            assert_eq!(
-                (got.n, got.sum, got.outer),
-                (want.n, want.sum, want.outer),
-                "k {k}"
-            );
+    fn half_neighbourhoods_break_ties_by_rank_and_sum_in_rank_order() {
+        // Lane 0: a 7 x 7 integer grid in scrambled order (many exactly equal distances
+        // to the centre); the other lanes irregular. Brute force on (distance, rank).
+        for k in [16, 45, 48, 128] {
+            let mut xyz = lanes(k);
+            for (j, q) in xyz.iter_mut().enumerate() {
+                let i = (j * 19) % 49;
+                let (x, y) = ((i % 7) as f64, (i / 7 % 7) as f64);
+                [q[0][0], q[1][0], q[2][0]] = [x, y, 0.5 * (i % 3) as f64];
+            }
+            let mut prefix = [Moments::default(); LANES];
+            for (l, m) in prefix.iter_mut().enumerate() {
+                *m = Moments::of(lane(&xyz, l).into_iter());
+            }
+            let mut keys = vec![Vec::new(); LANES];
+            let mut select = SmallestFirst::new();
+            let arch = pulp::Arch::new();
+            let got = half_neighbourhoods(arch, &xyz, &prefix, LANES, &mut keys, &mut select);
+            for l in 0..LANES {
+                let pts = lane(&xyz, l);
+                let m = prefix[l].mean();
+                let mut ranked: Vec<(f64, usize)> = (0..k).map(|j| (dist2(pts[j], m), j)).collect();
+                ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                let mut half: Vec<usize> = ranked[..k / 2].iter().map(|&(_, j)| j).collect();
+                half.sort_unstable();
+                let want = Moments::of(half.iter().map(|&j| pts[j]));
+                assert!(same(&got[l], &want), "k {k} lane {l}");
+            }
         }
     }
 

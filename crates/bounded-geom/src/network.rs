@@ -11,8 +11,8 @@
 //!   mask is a constant, the registers never leave the register file and nothing
 //!   branches on the data: 12% faster than `sort_unstable`;
 //! - the smaller half of 16..128 keys (the normal's half neighbourhood): both halves
-//!   sorted, one min against the reversed other: ~4% faster than the quickselect; the
-//!   half is then marked by comparing every key with its largest (~2%);
+//!   sorted, one min against the reversed other, of which the largest is the half's
+//!   threshold: ~4% faster than the quickselect;
 //! - the distance filter, eight candidates per register, keys packed by a compress:
 //!   ~4.5% (7% on an airborne scan).
 //!
@@ -81,16 +81,11 @@ impl Network {
         matches!(n, 16 | 32 | 64 | 128)
     }
 
-    /// Marks the smaller half of `keys` (distinct, a length that [`halves`](Self::halves)
-    /// takes): sets bit `j % 64` of `bits[j / 64]` when `keys[j]` is in it, clears the
-    /// others (`bits` holds `keys.len().div_ceil(64)` words).
-    pub(crate) fn mark_smaller_half(self, keys: &[u64], bits: &mut [u64]) {
-        assert!(Self::halves(keys.len()) && bits.len() == keys.len().div_ceil(64));
-        self.0.vectorize(MarkSmallerHalf {
-            simd: self.0,
-            keys,
-            bits,
-        });
+    /// The largest of the smaller half of `keys` (distinct, a length that
+    /// [`halves`](Self::halves) takes): the keys at or below it are that half.
+    pub(crate) fn half_max(self, keys: &[u64]) -> u64 {
+        assert!(Self::halves(keys.len()));
+        self.0.vectorize(HalfMax { simd: self.0, keys })
     }
 }
 
@@ -162,39 +157,24 @@ macro_rules! half_max {
     }};
 }
 
-/// The body of [`Network::mark_smaller_half`], compiled for AVX-512.
-///
-/// The half is marked by one compare per register against its largest key, which
-/// the networks find (`half_max!`): ~2% faster `detect` than storing the half and
-/// setting its bits key by key. (Finding that key by counting passes instead, from
-/// probes that exploit how nearly sorted the features' keys come, took two or three
-/// passes on average but measured no faster than the networks: each pass waits for
-/// the last, and their number is unpredictable.)
-struct MarkSmallerHalf<'a> {
+/// The body of [`Network::half_max`], compiled for AVX-512.
+struct HalfMax<'a> {
     simd: V4,
     keys: &'a [u64],
-    bits: &'a mut [u64],
 }
 
-impl NullaryFnOnce for MarkSmallerHalf<'_> {
-    type Output = ();
+impl NullaryFnOnce for HalfMax<'_> {
+    type Output = u64;
 
     #[inline(always)]
-    fn call(self) {
-        let Self { simd, keys, bits } = self;
-        let threshold = match keys.len() {
+    fn call(self) -> u64 {
+        let Self { simd, keys } = self;
+        match keys.len() {
             16 => half_max!(simd, keys, 1, sort8),
             32 => half_max!(simd, keys, 2, sort16),
             64 => half_max!(simd, keys, 4, sort32),
             128 => half_max!(simd, keys, 8, sort64),
             n => unreachable!("no network for {n} keys"),
-        };
-        let threshold = simd.splat_u64x8(threshold);
-        bits.fill(0);
-        for (r, chunk) in keys.chunks_exact(L).enumerate() {
-            let x: u64x8 = cast::<[u64; L], _>(chunk.try_into().unwrap_or([u64::MAX; L]));
-            let marked = u64::from(simd.cmp_le_u64x8(x, threshold).0);
-            bits[r * L / 64] |= marked << (r * L % 64);
         }
     }
 }

@@ -3,18 +3,17 @@
 
 use std::cmp::Ordering;
 
-/// Marks the `m` smallest of a set of distinct `u64` keys, as bits by position.
+/// The `m`-th smallest of a set of distinct `u64` keys: the threshold at or below which
+/// the `m` smallest lie.
 ///
-/// The smaller half of 16, 32, 64 or 128 keys is found by AVX-512 code when the CPU has
-/// it (checked once, when the selector is made: a bracket from the nearly sorted keys,
-/// or sorting networks); anything else by a quickselect with branch-free partitions on
-/// a copy. The marked keys are the same either way.
+/// For the smaller half of 16, 32, 64 or 128 keys, AVX-512 sorting networks find it
+/// when the CPU has them (checked once, when the selector is made); anything else a
+/// quickselect with branch-free partitions, on a copy. The result is the same either
+/// way.
 ///
 /// ```
 /// use bounded_geom::SmallestFirst;
-/// let mut bits = Vec::new();
-/// SmallestFirst::new().mark(&[9, 3, 7, 1, 8, 2], 3, &mut bits);
-/// assert_eq!(bits, [0b10_1010]);
+/// assert_eq!(SmallestFirst::new().nth_smallest(&[9, 3, 7, 1, 8, 2], 3), 3);
 /// ```
 #[derive(Clone)]
 pub struct SmallestFirst {
@@ -40,35 +39,27 @@ impl SmallestFirst {
         }
     }
 
-    /// Sets `bits` to `keys.len().div_ceil(64)` words with bit `j % 64` of word `j / 64`
-    /// set when `keys[j]` is one of the `m` smallest of `keys` (distinct); all of them
-    /// when `m >= keys.len()`.
-    pub fn mark(&mut self, keys: &[u64], m: usize, bits: &mut Vec<u64>) {
-        bits.clear();
-        bits.resize(keys.len().div_ceil(64), 0);
+    /// The `m`-th smallest of `keys` (distinct), counting from 1; the largest when
+    /// `m >= keys.len()`. Panics for no keys or `m = 0`.
+    pub fn nth_smallest(&mut self, keys: &[u64], m: usize) -> u64 {
+        assert!(m > 0 && !keys.is_empty(), "no keys to choose from");
         #[cfg(target_arch = "x86_64")]
         if let Some(network) = self.network
             && crate::network::Network::halves(keys.len())
             && m == keys.len() / 2
         {
-            network.mark_smaller_half(keys, bits);
-            return;
+            return network.half_max(keys);
         }
         let m = m.min(keys.len());
-        if m == 0 {
-            return;
-        }
         self.copy.clear();
         self.copy.extend_from_slice(keys);
         quickselect(&mut self.copy, m);
-        let threshold = self.copy[..m].iter().copied().max().unwrap_or(0);
-        for (j, &key) in keys.iter().enumerate() {
-            bits[j / 64] |= u64::from(key <= threshold) << (j % 64);
-        }
+        self.copy[..m].iter().copied().max().unwrap_or(0)
     }
 }
 
-/// Moves the `m` smallest of `keys` to the front: [`SmallestFirst::mark`] without AVX-512.
+/// Moves the `m` smallest of `keys` to the front: [`SmallestFirst::nth_smallest`]
+/// without AVX-512.
 ///
 /// Quickselect with branch-free Lomuto partitions: which side a key falls on is
 /// unpredictable, so an unconditional swap costs less than a branch. The pivot is the
@@ -134,7 +125,7 @@ mod tests {
     }
 
     #[test]
-    fn marks_match_a_sort_for_halves_and_other_counts() {
+    fn nth_smallest_matches_a_sort_for_halves_and_other_counts() {
         let mut select = SmallestFirst::new();
         #[cfg(target_arch = "x86_64")]
         if select.network.is_none() {
@@ -146,28 +137,20 @@ mod tests {
                 let keys: Vec<u64> = (0..n as u64)
                     .map(|i| {
                         let r = random();
-                        // Nearly sorted (as the features' keys, most taking the
-                        // bracket), shuffled a little more, or random (the networks).
-                        let high = match round % 3 {
-                            0 => i + (r >> 62),
-                            1 => i + (r >> 59),
-                            _ => r >> 40,
+                        // Nearly sorted (as the features' keys) or random.
+                        let high = if round % 2 == 0 {
+                            i + (r >> 62)
+                        } else {
+                            r >> 40
                         };
                         high << 8 | i
                     })
                     .collect();
                 let mut sorted = keys.clone();
                 sorted.sort_unstable();
-                for m in [n / 2, 1, n - 1] {
-                    let mut want = vec![0u64; n.div_ceil(64)];
-                    for (j, key) in keys.iter().enumerate() {
-                        if *key <= sorted[m - 1] {
-                            want[j / 64] |= 1 << (j % 64);
-                        }
-                    }
-                    let mut got = Vec::new();
-                    select.mark(&keys, m, &mut got);
-                    assert_eq!(got, want, "n {n} m {m} round {round}");
+                for m in [n / 2, 1, n - 1, n, n + 3] {
+                    let want = sorted[m.min(n) - 1];
+                    assert_eq!(select.nth_smallest(&keys, m), want, "n {n} m {m}");
                 }
             }
         }
