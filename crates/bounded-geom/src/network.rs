@@ -240,15 +240,18 @@ impl NullaryFnOnce for KeepWithin<'_> {
 /// `R` registers from `keys[at..]`, `u64::MAX` beyond its end.
 #[inline(always)]
 fn load_registers<const R: usize>(keys: &[u64], at: usize) -> [u64x8; R] {
-    // A loop rather than `array::from_fn`, whose closure is not always inlined.
+    // A loop rather than `array::from_fn`, whose closure is not always inlined; whole
+    // registers apart, as a copy of a variable length is a call to `memmove`.
     let mut v = [cast([u64::MAX; L]); R];
     for (r, register) in v.iter_mut().enumerate() {
-        let mut lanes = [u64::MAX; L];
-        if let Some(have) = keys.get(at + r * L..) {
-            let n = have.len().min(L);
-            lanes[..n].copy_from_slice(&have[..n]);
+        let start = at + r * L;
+        if let Some(&whole) = keys.get(start..start + L).and_then(|k| k.as_array::<L>()) {
+            *register = cast(whole);
+        } else if let Some(have) = keys.get(start..) {
+            let mut lanes = [u64::MAX; L];
+            lanes[..have.len()].copy_from_slice(have);
+            *register = cast(lanes);
         }
-        *register = cast(lanes);
     }
     v
 }
