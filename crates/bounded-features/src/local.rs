@@ -50,7 +50,7 @@ pub(crate) struct Scratch {
     /// The moments of each scale's half neighbourhood per lane, largest scale first.
     half: Vec<[Moments; LANES]>,
     /// Each lane's keys of a half neighbourhood's candidates.
-    keys: Vec<Vec<u64>>,
+    keys: Vec<[u64; LANES]>,
     /// The selection of the half neighbourhoods.
     select: SmallestFirst,
     /// Each lane's eigen problems.
@@ -63,7 +63,7 @@ impl Scratch {
             xyz: Vec::with_capacity(k0),
             prefix: Vec::new(),
             half: Vec::new(),
-            keys: (0..LANES).map(|_| Vec::with_capacity(k0)).collect(),
+            keys: Vec::with_capacity(k0),
             select: SmallestFirst::new(),
             batches: (0..LANES).map(|_| Batch::default()).collect(),
         }
@@ -175,7 +175,7 @@ pub(crate) fn group_features(
     scratch.half.clear();
     for (&k, prefix) in config.scales.iter().zip(&scratch.prefix) {
         let (keys, select) = (&mut scratch.keys, &mut scratch.select);
-        let half = half_neighbourhoods(arch, &xyz[..k], prefix, count, keys, select);
+        let half = half_neighbourhoods(arch, &xyz[..k], prefix, keys, select);
         scratch.half.push(half);
     }
     // Two batches of eigen problems per point (see `eigenvalues_batch`): each scale's
@@ -252,8 +252,7 @@ fn half_neighbourhoods(
     arch: pulp::Arch,
     xyz: &[[Lanes; 3]],
     prefix: &[Moments; LANES],
-    count: usize,
-    keys: &mut [Vec<u64>],
+    keys: &mut Vec<[u64; LANES]>,
     select: &mut SmallestFirst,
 ) -> [Moments; LANES] {
     let k = xyz.len();
@@ -273,10 +272,7 @@ fn half_neighbourhoods(
         rank_bits,
         keys,
     });
-    let mut threshold = [0; LANES];
-    for (t, keys) in threshold.iter_mut().zip(keys.iter()).take(count) {
-        *t = select.nth_smallest(&keys[..k], k / 2);
-    }
+    let threshold = select.nth_smallest_lanes(keys, k / 2);
     arch.dispatch(NearSums {
         xyz,
         centre,
@@ -372,12 +368,14 @@ impl pulp::WithSimd for PrefixSums<'_> {
 }
 
 /// The keys of [`half_neighbourhoods`] into `keys`: each lane's squared distances of
-/// `xyz` to its `centre`, the rank in the `rank_bits`.
+/// `xyz` to its `centre`, the rank in the `rank_bits`, side by side (the selection turns
+/// them into rows: written straight into each lane's row instead, the scattered stores
+/// cost 4%).
 struct Keys<'a> {
     xyz: &'a [[Lanes; 3]],
     centre: [Lanes; 3],
     rank_bits: u64,
-    keys: &'a mut [Vec<u64>],
+    keys: &'a mut Vec<[u64; LANES]>,
 }
 
 impl pulp::WithSimd for Keys<'_> {
@@ -391,18 +389,12 @@ impl pulp::WithSimd for Keys<'_> {
             rank_bits,
             keys,
         } = self;
-        for keys in keys.iter_mut() {
-            keys.clear();
-            keys.resize(xyz.len(), 0);
-        }
-        let mut lanes = [0u64; LANES];
-        for (j, xyz) in xyz.iter().enumerate() {
-            let registers = S::as_mut_simd_u64s(&mut lanes).0;
+        keys.clear();
+        keys.resize(xyz.len(), [0; LANES]);
+        for (j, (xyz, keys)) in xyz.iter().zip(keys.iter_mut()).enumerate() {
+            let registers = S::as_mut_simd_u64s(keys).0;
             for (r, out) in registers.iter_mut().enumerate() {
                 *out = near_key(simd, xyz, &centre, rank_bits, j, r);
-            }
-            for (keys, &key) in keys.iter_mut().zip(&lanes) {
-                keys[j] = key;
             }
         }
     }
@@ -753,10 +745,9 @@ mod tests {
             for (l, m) in prefix.iter_mut().enumerate() {
                 *m = Moments::of(lane(&xyz, l).into_iter());
             }
-            let mut keys = vec![Vec::new(); LANES];
             let mut select = SmallestFirst::new();
             let arch = pulp::Arch::new();
-            let got = half_neighbourhoods(arch, &xyz, &prefix, LANES, &mut keys, &mut select);
+            let got = half_neighbourhoods(arch, &xyz, &prefix, &mut Vec::new(), &mut select);
             for l in 0..LANES {
                 let pts = lane(&xyz, l);
                 let m = prefix[l].mean();

@@ -87,6 +87,15 @@ impl Network {
         assert!(Self::halves(keys.len()));
         self.0.vectorize(HalfMax { simd: self.0, keys })
     }
+
+    /// [`half_max`](Self::half_max) of each column of `keys` (rows of eight lanes, a
+    /// length that [`halves`](Self::halves) takes); `rows` is scratch.
+    pub(crate) fn half_max_lanes(self, keys: &[[u64; L]], rows: &mut Vec<u64>) -> [u64; L] {
+        assert!(Self::halves(keys.len()));
+        rows.resize(L * keys.len(), 0);
+        let simd = self.0;
+        self.0.vectorize(HalfMaxLanes { simd, keys, rows })
+    }
 }
 
 /// The `K` smallest of the sorted registers `$a` and the keys of `$keys` beyond `K`
@@ -152,8 +161,16 @@ macro_rules! half_max {
         $sort(simd, &mut a);
         $sort(simd, &mut b);
         keep_smaller(simd, &mut a, &b);
-        let lanes: [[u64; L]; $r] = cast(a);
-        lanes.into_iter().flatten().max().unwrap_or(u64::MAX)
+        let mut top = a[0];
+        for x in &a[1..] {
+            top = simd.max_u64x8(top, *x);
+        }
+        let lanes: [u64; L] = cast(top);
+        let mut max = lanes[0];
+        for &x in &lanes[1..] {
+            max = max.max(x);
+        }
+        max
     }};
 }
 
@@ -177,6 +194,83 @@ impl NullaryFnOnce for HalfMax<'_> {
             n => unreachable!("no network for {n} keys"),
         }
     }
+}
+
+/// The body of [`Network::half_max_lanes`], compiled for AVX-512: the columns become
+/// rows (eight keys at a time, by [`transpose`]), each row goes through `half_max!`.
+struct HalfMaxLanes<'a> {
+    simd: V4,
+    keys: &'a [[u64; L]],
+    rows: &'a mut [u64],
+}
+
+impl NullaryFnOnce for HalfMaxLanes<'_> {
+    type Output = [u64; L];
+
+    #[inline(always)]
+    fn call(self) -> [u64; L] {
+        let Self { simd, keys, rows } = self;
+        let n = keys.len();
+        let (blocks, _) = keys.as_chunks::<L>();
+        for (b, block) in blocks.iter().enumerate() {
+            let mut r = [simd.splat_u64x8(0); L];
+            for (r, row) in r.iter_mut().zip(block) {
+                *r = cast(*row);
+            }
+            let columns = transpose(simd, r);
+            for (l, column) in columns.iter().enumerate() {
+                let at = l * n + b * L;
+                rows[at..at + L].copy_from_slice(&cast::<u64x8, [u64; L]>(*column));
+            }
+        }
+        let mut out = [0; L];
+        for (o, row) in out.iter_mut().zip(rows.chunks_exact(n)) {
+            *o = match n {
+                16 => half_max!(simd, row, 1, sort8),
+                32 => half_max!(simd, row, 2, sort16),
+                64 => half_max!(simd, row, 4, sort32),
+                128 => half_max!(simd, row, 8, sort64),
+                n => unreachable!("no network for {n} keys"),
+            };
+        }
+        out
+    }
+}
+
+/// The columns of the 8 x 8 matrix with rows `r`: three rounds of pairwise
+/// interleaving (single keys, pairs, quadruples), 24 permutes. (Loops, not `array::map`:
+/// its closures are not always inlined, and their intrinsics become calls.)
+#[inline(always)]
+fn transpose(simd: V4, r: [u64x8; L]) -> [u64x8; L] {
+    let mix = |a: u64x8, b: u64x8, index: [u64; L]| -> u64x8 {
+        let (a, index, b): (__m512i, __m512i, __m512i) = (cast(a), cast(index), cast(b));
+        cast(simd.avx512f._mm512_permutex2var_epi64(a, index, b))
+    };
+    let zero = simd.splat_u64x8(0);
+    // a[2i], a[2i + 1]: rows 2i and 2i + 1 interleaved, even and odd columns.
+    let (even, odd) = ([0, 8, 2, 10, 4, 12, 6, 14], [1, 9, 3, 11, 5, 13, 7, 15]);
+    let mut a = [zero; L];
+    for i in (0..L).step_by(2) {
+        a[i] = mix(r[i], r[i + 1], even);
+        a[i + 1] = mix(r[i], r[i + 1], odd);
+    }
+    // b[c], b[c + 4] (c < 4): columns c and c + 4 of rows 0-3 and of rows 4-7.
+    let (low, high) = ([0, 1, 8, 9, 4, 5, 12, 13], [2, 3, 10, 11, 6, 7, 14, 15]);
+    let mut b = [zero; L];
+    for base in [0, 4] {
+        for parity in 0..2 {
+            let (x, y) = (a[base + parity], a[base + parity + 2]);
+            b[base + parity] = mix(x, y, low);
+            b[base + parity + 2] = mix(x, y, high);
+        }
+    }
+    let (lower, upper) = ([0, 1, 2, 3, 8, 9, 10, 11], [4, 5, 6, 7, 12, 13, 14, 15]);
+    let mut columns = [zero; L];
+    for c in 0..4 {
+        columns[c] = mix(b[c], b[c + 4], lower);
+        columns[c + 4] = mix(b[c], b[c + 4], upper);
+    }
+    columns
 }
 
 /// The body of [`Network::keep_within`], compiled for AVX-512.
@@ -339,6 +433,27 @@ fn stage<const R: usize, const K: usize, const J: usize>(simd: V4, v: &mut [u64x
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn half_max_lanes_matches_each_column_sorted() {
+        let Some(network) = Network::detect() else {
+            println!("skipped: this CPU has no AVX-512");
+            return;
+        };
+        let mut random = crate::test_stream(5);
+        let mut rows = Vec::new();
+        for n in [16, 32, 64, 128] {
+            let keys: Vec<[u64; L]> = (0..n as u64)
+                .map(|j| std::array::from_fn(|l| (random() >> 40) << 8 | j << 3 | l as u64))
+                .collect();
+            let got = network.half_max_lanes(&keys, &mut rows);
+            for (l, got) in got.into_iter().enumerate() {
+                let mut column: Vec<u64> = keys.iter().map(|k| k[l]).collect();
+                column.sort_unstable();
+                assert_eq!(got, column[n / 2 - 1], "n {n} lane {l}");
+            }
+        }
+    }
 
     #[test]
     fn matches_a_sort_for_every_kept_count() {

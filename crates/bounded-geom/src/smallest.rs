@@ -21,6 +21,8 @@ pub struct SmallestFirst {
     network: Option<crate::network::Network>,
     /// The quickselect's copy of the keys.
     copy: Vec<u64>,
+    /// Columns of keys as rows.
+    rows: Vec<u64>,
 }
 
 impl Default for SmallestFirst {
@@ -36,6 +38,7 @@ impl SmallestFirst {
             #[cfg(target_arch = "x86_64")]
             network: crate::network::Network::detect(),
             copy: Vec::new(),
+            rows: Vec::new(),
         }
     }
 
@@ -50,6 +53,32 @@ impl SmallestFirst {
         {
             return network.half_max(keys);
         }
+        self.quickselect(keys, m)
+    }
+
+    /// [`nth_smallest`](Self::nth_smallest) of each of the eight columns of `keys` (rows
+    /// of eight lanes, e.g. eight points' keys side by side).
+    pub fn nth_smallest_lanes(&mut self, keys: &[[u64; 8]], m: usize) -> [u64; 8] {
+        assert!(m > 0 && !keys.is_empty(), "no keys to choose from");
+        #[cfg(target_arch = "x86_64")]
+        if let Some(network) = self.network
+            && crate::network::Network::halves(keys.len())
+            && m == keys.len() / 2
+        {
+            return network.half_max_lanes(keys, &mut self.rows);
+        }
+        std::array::from_fn(|l| {
+            let mut column = std::mem::take(&mut self.rows);
+            column.clear();
+            column.extend(keys.iter().map(|k| k[l]));
+            let nth = self.quickselect(&column, m);
+            self.rows = column;
+            nth
+        })
+    }
+
+    /// [`nth_smallest`](Self::nth_smallest) by [`quickselect`] on a copy.
+    fn quickselect(&mut self, keys: &[u64], m: usize) -> u64 {
         let m = m.min(keys.len());
         self.copy.clear();
         self.copy.extend_from_slice(keys);
@@ -151,6 +180,15 @@ mod tests {
                 for m in [n / 2, 1, n - 1, n, n + 3] {
                     let want = sorted[m.min(n) - 1];
                     assert_eq!(select.nth_smallest(&keys, m), want, "n {n} m {m}");
+                    // The same keys in every lane but one, which holds them reversed.
+                    let lanes: Vec<[u64; 8]> = (0..n)
+                        .map(|j| std::array::from_fn(|l| keys[if l == 5 { n - 1 - j } else { j }]))
+                        .collect();
+                    assert_eq!(
+                        select.nth_smallest_lanes(&lanes, m),
+                        [want; 8],
+                        "n {n} m {m}"
+                    );
                 }
             }
         }
