@@ -9,7 +9,10 @@
 //!   faster than always 8), the 128 smallest are taken by one min against the
 //!   reversed rest (a bitonic sequence) and merged by seven more stages. Every index and
 //!   mask is a constant, the registers never leave the register file and nothing
-//!   branches on the data: 12% faster than `sort_unstable`;
+//!   branches on the data: 12% faster than `sort_unstable`. The first rounds of the 128-
+//!   and 64-key sorts (up to sorted runs of 16 or 8, the rounds that permute within
+//!   registers) are replaced by Batcher's network on whole registers (every column
+//!   sorted at once) and a transpose: 1M cube 1.16 -> 1.10 s;
 //! - the smaller half of 16..128 keys (the normal's half neighbourhood): both halves
 //!   sorted, one min against the reversed other, of which the largest is the half's
 //!   threshold: ~4% faster than the quickselect;
@@ -390,10 +393,78 @@ macro_rules! sorter {
 sorter!(sort8, 1; 2: 1; 4: 2 1; 8: 4 2 1;);
 sorter!(sort16, 2; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1;);
 sorter!(sort32, 4; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;);
-sorter!(sort64, 8; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;
-    64: 32 16 8 4 2 1;);
-sorter!(sort128, 16; 2: 1; 4: 2 1; 8: 4 2 1; 16: 8 4 2 1; 32: 16 8 4 2 1;
-    64: 32 16 8 4 2 1; 128: 64 32 16 8 4 2 1;);
+
+/// [`sorter!`] for 64 keys, its first three rounds (sorted runs of 8) by [`runs8`].
+#[inline(always)]
+fn sort64(simd: V4, v: &mut [u64x8; 8]) {
+    runs8(simd, v);
+    stages!(simd, v, 8; 16: 8 4 2 1; 32: 16 8 4 2 1; 64: 32 16 8 4 2 1;);
+}
+
+/// [`sorter!`] for 128 keys, its first four rounds (sorted runs of 16) by [`runs16`].
+#[inline(always)]
+fn sort128(simd: V4, v: &mut [u64x8; 16]) {
+    runs16(simd, v);
+    stages!(simd, v, 16; 32: 16 8 4 2 1; 64: 32 16 8 4 2 1; 128: 64 32 16 8 4 2 1;);
+}
+
+/// Compare-exchanges of whole registers, lane by lane: `(i, j)` leaves the smaller of
+/// each lane in `v[i]`. (A macro: every index a constant.)
+macro_rules! columns {
+    ($simd:expr, $v:expr; $($i:literal $j:literal;)*) => {
+        $(
+            let (lo, hi) = ($simd.min_u64x8($v[$i], $v[$j]), $simd.max_u64x8($v[$i], $v[$j]));
+            ($v[$i], $v[$j]) = (lo, hi);
+        )*
+    };
+}
+
+/// The state of the bitonic sort of 64 keys after its blocks of 8: each register
+/// sorted, ascending for even registers, descending for odd ones. The eight columns
+/// are sorted by Batcher's odd-even merge network (19 compare-exchanges of whole
+/// registers, no permutes), then transposed into rows: a third of the work of the
+/// sort's first three rounds (six rounds of permutes within registers).
+#[inline(always)]
+fn runs8(simd: V4, v: &mut [u64x8; 8]) {
+    columns!(simd, v; 0 1; 2 3; 4 5; 6 7; 0 2; 1 3; 4 6; 5 7; 1 2; 5 6; 0 4; 1 5; 2 6; 3 7;
+        2 4; 3 5; 1 2; 3 4; 5 6;);
+    *v = transpose(simd, *v);
+    for r in (1..L).step_by(2) {
+        v[r] = reverse(simd, v[r]);
+    }
+}
+
+/// The state of the bitonic sort of 128 keys after its blocks of 16: each pair of
+/// registers sorted, ascending for even pairs, descending for odd ones; as [`runs8`],
+/// with Batcher's network for 16 (63 compare-exchanges).
+#[inline(always)]
+fn runs16(simd: V4, v: &mut [u64x8; 16]) {
+    columns!(simd, v; 0 1; 2 3; 4 5; 6 7; 8 9; 10 11; 12 13; 14 15; 0 2; 1 3; 4 6; 5 7;
+        8 10; 9 11; 12 14; 13 15; 1 2; 5 6; 9 10; 13 14; 0 4; 1 5; 2 6; 3 7; 8 12; 9 13;
+        10 14; 11 15; 2 4; 3 5; 10 12; 11 13; 1 2; 3 4; 5 6; 9 10; 11 12; 13 14; 0 8; 1 9;
+        2 10; 3 11; 4 12; 5 13; 6 14; 7 15; 4 8; 5 9; 6 10; 7 11; 2 4; 3 5; 6 8; 7 9;
+        10 12; 11 13; 1 2; 3 4; 5 6; 7 8; 9 10; 11 12; 13 14;);
+    let mut upper = [v[0]; L];
+    let mut lower = [v[0]; L];
+    upper.copy_from_slice(&v[..L]);
+    lower.copy_from_slice(&v[L..]);
+    // Column c: its first 8 keys in upper[c], the rest in lower[c].
+    let (upper, lower) = (transpose(simd, upper), transpose(simd, lower));
+    for c in 0..L {
+        if c % 2 == 0 {
+            (v[2 * c], v[2 * c + 1]) = (upper[c], lower[c]);
+        } else {
+            (v[2 * c], v[2 * c + 1]) = (reverse(simd, lower[c]), reverse(simd, upper[c]));
+        }
+    }
+}
+
+/// The lanes of `x` in reverse order.
+#[inline(always)]
+fn reverse(simd: V4, x: u64x8) -> u64x8 {
+    let reverse: __m512i = cast([7u64, 6, 5, 4, 3, 2, 1, 0]);
+    cast(simd.avx512f._mm512_permutexvar_epi64(reverse, cast(x)))
+}
 
 /// Sorts the bitonic sequence of 128 keys in `v`, ascending.
 #[inline(always)]
