@@ -27,7 +27,7 @@ use std::collections::BinaryHeap;
 use std::ops::Range;
 
 use crate::morton::{BITS, Quantiser, code};
-use crate::select::{Selection, key_distance, key_index};
+use crate::select::{Filter, Selection, key_distance, key_index};
 
 /// Cells on each side of the query cell in the shared candidate box.
 const RING: i64 = 2;
@@ -360,6 +360,8 @@ impl Candidates {
         sel.clear();
         // Skips boxes whose every point is beyond the limit (with a rounding margin).
         let beyond = |b: &Box3| box_distance2(p, b) * (1.0 - MARGIN) >= f64::from(lim);
+        let ranges = &mut sel.ranges;
+        ranges.clear();
         let mut first_piece = 0;
         for (last_piece, group) in &self.groups {
             let pieces = std::mem::replace(&mut first_piece, *last_piece)..*last_piece;
@@ -369,17 +371,21 @@ impl Candidates {
             let mut begin = pieces.start.checked_sub(1).map_or(0, |i| self.pieces[i].0);
             for (end, piece) in &self.pieces[pieces] {
                 let r = std::mem::replace(&mut begin, *end)..*end;
-                if beyond(piece) {
-                    continue;
+                if !beyond(piece) {
+                    ranges.push(r);
                 }
-                let xyz = (
-                    &self.xs[r.clone()],
-                    &self.ys[r.clone()],
-                    &self.zs[r.clone()],
-                );
-                sel.keep_within(p, q, lim, xyz, &self.index[r]);
             }
         }
+        let ranges = std::mem::take(&mut sel.ranges);
+        sel.keep_ranges(Filter {
+            p,
+            q,
+            lim,
+            xyz: (&self.xs, &self.ys, &self.zs),
+            index: &self.index,
+            ranges: &ranges,
+        });
+        sel.ranges = ranges;
         if sel.kept() < k {
             return false;
         }

@@ -31,6 +31,8 @@ use pulp::x86::V4;
 
 use pulp::{NullaryFnOnce, b8, cast, u64x8};
 
+use crate::select::Filter;
+
 /// Lanes per register.
 const L: usize = 8;
 /// The neighbour count the networks serve.
@@ -54,32 +56,21 @@ impl Network {
         self.0.vectorize(SmallestSorted { simd: self.0, keys });
     }
 
-    /// The distance filter of [`Selection::keep_within`](crate::select::Selection) for
-    /// whole registers of eight candidates: writes the kept keys to the front of `out`
-    /// (overwriting up to a register beyond them) and returns their count and the
-    /// number of candidates done. Distances are computed exactly as there.
-    pub(crate) fn keep_within(
-        self,
-        p: [f32; 3],
-        q: u32,
-        lim: f32,
-        xyz: (&[f32], &[f32], &[f32]),
-        index: &[u32],
-        out: &mut [u64],
-    ) -> (usize, usize) {
-        let op = KeepWithin {
-            simd: self.0,
-            p,
-            q,
-            lim,
-            xyz,
-            index,
+    /// The distance filter of [`Selection::keep_ranges`](crate::select::Selection) over
+    /// the candidates `ranges`, eight at a time and the rest one by one, in one call:
+    /// writes the kept keys to `out` from `kept` on (overwriting up to a register
+    /// beyond them) and returns the new count. Distances are computed exactly as there.
+    pub(crate) fn keep_ranges(self, filter: Filter<'_>, out: &mut [u64], kept: usize) -> usize {
+        let simd = self.0;
+        self.0.vectorize(KeepRanges {
+            simd,
+            filter,
             out,
-        };
-        self.0.vectorize(op)
+            kept,
+        })
     }
 
-    /// Whether [`smaller_half`](Self::smaller_half) takes `n` keys.
+    /// Whether [`half_max`](Self::half_max) takes `n` keys.
     pub(crate) fn halves(n: usize) -> bool {
         matches!(n, 16 | 32 | 64 | 128)
     }
@@ -276,61 +267,76 @@ fn transpose(simd: V4, r: [u64x8; L]) -> [u64x8; L] {
     columns
 }
 
-/// The body of [`Network::keep_within`], compiled for AVX-512.
-struct KeepWithin<'a> {
+/// The body of [`Network::keep_ranges`], compiled for AVX-512.
+struct KeepRanges<'a> {
     simd: V4,
-    p: [f32; 3],
-    q: u32,
-    lim: f32,
-    xyz: (&'a [f32], &'a [f32], &'a [f32]),
-    index: &'a [u32],
+    filter: Filter<'a>,
     out: &'a mut [u64],
+    kept: usize,
 }
 
-impl NullaryFnOnce for KeepWithin<'_> {
-    type Output = (usize, usize);
+impl NullaryFnOnce for KeepRanges<'_> {
+    type Output = usize;
 
     #[inline(always)]
-    fn call(self) -> (usize, usize) {
+    fn call(self) -> usize {
         let Self {
             simd,
+            filter,
+            out,
+            mut kept,
+        } = self;
+        let Filter {
             p,
             q,
             lim,
             xyz: (xs, ys, zs),
             index,
-            out,
-        } = self;
-        let mut kept = 0;
+            ranges,
+        } = filter;
         let (avx, avx512) = (simd.avx, simd.avx512f);
-        let [px, py, pz] = p.map(|c| avx._mm256_set1_ps(c));
+        let (px, py, pz) = (
+            avx._mm256_set1_ps(p[0]),
+            avx._mm256_set1_ps(p[1]),
+            avx._mm256_set1_ps(p[2]),
+        );
         let limit = avx._mm256_set1_ps(lim);
         let query = avx512._mm512_set1_epi64(i64::from(q));
         let one = avx512._mm512_set1_epi64(1);
-        let (index, _) = index.as_chunks::<L>();
-        let [xs, ys, zs] = [xs, ys, zs].map(|c| c.as_chunks::<L>().0);
-        for (b, &i) in index.iter().enumerate() {
-            // (p - x)^2 + (p - y)^2 + (p - z)^2 in this order, as `knn::dist2`.
-            let [dx, dy, dz] = [(px, xs), (py, ys), (pz, zs)]
-                .map(|(pc, c)| avx._mm256_sub_ps(pc, cast::<[f32; L], __m256>(c[b])));
-            let d = avx._mm256_add_ps(
-                avx._mm256_add_ps(avx._mm256_mul_ps(dx, dx), avx._mm256_mul_ps(dy, dy)),
-                avx._mm256_mul_ps(dz, dz),
+        for r in ranges {
+            let (chunks, _) = index[r.clone()].as_chunks::<L>();
+            let (cx, cy, cz) = (
+                xs[r.clone()].as_chunks::<L>().0,
+                ys[r.clone()].as_chunks::<L>().0,
+                zs[r.clone()].as_chunks::<L>().0,
             );
-            let within = avx512._mm256_cmp_ps_mask::<_CMP_LT_OQ>(d, limit);
-            let i = avx512._mm512_cvtepu32_epi64(cast(i));
-            let bits = avx512._mm512_cvtepu32_epi64(cast(d));
-            let key = avx512._mm512_add_epi64(
-                avx512._mm512_or_si512(avx512._mm512_slli_epi64::<32>(bits), i),
-                one,
-            );
-            // The query's own key is 0.
-            let key = avx512._mm512_maskz_mov_epi64(!avx512._mm512_cmpeq_epi64_mask(i, query), key);
-            let packed = avx512._mm512_maskz_compress_epi64(within, key);
-            out[kept..kept + L].copy_from_slice(&cast::<__m512i, [u64; L]>(packed));
-            kept += within.count_ones() as usize;
+            for (b, &i) in chunks.iter().enumerate() {
+                // (p - x)^2 + (p - y)^2 + (p - z)^2 in this order, as `knn::dist2`.
+                let dx = avx._mm256_sub_ps(px, cast::<[f32; L], __m256>(cx[b]));
+                let dy = avx._mm256_sub_ps(py, cast::<[f32; L], __m256>(cy[b]));
+                let dz = avx._mm256_sub_ps(pz, cast::<[f32; L], __m256>(cz[b]));
+                let d = avx._mm256_add_ps(
+                    avx._mm256_add_ps(avx._mm256_mul_ps(dx, dx), avx._mm256_mul_ps(dy, dy)),
+                    avx._mm256_mul_ps(dz, dz),
+                );
+                let within = avx512._mm256_cmp_ps_mask::<_CMP_LT_OQ>(d, limit);
+                let i = avx512._mm512_cvtepu32_epi64(cast(i));
+                let bits = avx512._mm512_cvtepu32_epi64(cast(d));
+                let key = avx512._mm512_add_epi64(
+                    avx512._mm512_or_si512(avx512._mm512_slli_epi64::<32>(bits), i),
+                    one,
+                );
+                // The query's own key is 0.
+                let own = avx512._mm512_cmpeq_epi64_mask(i, query);
+                let key = avx512._mm512_maskz_mov_epi64(!own, key);
+                let packed = avx512._mm512_maskz_compress_epi64(within, key);
+                out[kept..kept + L].copy_from_slice(&cast::<__m512i, [u64; L]>(packed));
+                kept += within.count_ones() as usize;
+            }
+            let rest = r.start + chunks.len() * L..r.end;
+            kept = filter.keep_one_by_one(rest, out, kept);
         }
-        (kept, index.len() * L)
+        kept
     }
 }
 
