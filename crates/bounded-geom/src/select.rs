@@ -64,6 +64,8 @@ pub(crate) struct Selection {
     kept: usize,
     /// The candidate ranges a query filters (reused from query to query).
     pub(crate) ranges: Vec<Range<usize>>,
+    /// Which pieces of a group a query filters (reused).
+    pub(crate) near: Vec<bool>,
     /// AVX-512 sorting networks for the usual case, when the CPU has them.
     #[cfg(target_arch = "x86_64")]
     network: Option<crate::network::Network>,
@@ -76,6 +78,7 @@ impl Default for Selection {
             keys: Vec::new(),
             kept: 0,
             ranges: Vec::new(),
+            near: Vec::new(),
             #[cfg(target_arch = "x86_64")]
             network: crate::network::Network::detect(),
         }
