@@ -205,6 +205,9 @@ impl NullaryFnOnce for HalfMaxLanes<'_> {
     fn call(self) -> [u64; L] {
         let Self { simd, keys, rows } = self;
         let n = keys.len();
+        if n <= 32 {
+            return columns_half_max(simd, keys);
+        }
         let (blocks, _) = keys.as_chunks::<L>();
         for (b, block) in blocks.iter().enumerate() {
             let mut r = [simd.splat_u64x8(0); L];
@@ -220,8 +223,6 @@ impl NullaryFnOnce for HalfMaxLanes<'_> {
         let mut out = [0; L];
         for (o, row) in out.iter_mut().zip(rows.chunks_exact(n)) {
             *o = match n {
-                16 => half_max!(simd, row, 1, sort8),
-                32 => half_max!(simd, row, 2, sort16),
                 64 => half_max!(simd, row, 4, sort32),
                 128 => half_max!(simd, row, 8, sort64),
                 n => unreachable!("no network for {n} keys"),
@@ -442,14 +443,10 @@ fn runs8(simd: V4, v: &mut [u64x8; 8]) {
 
 /// The state of the bitonic sort of 128 keys after its blocks of 16: each pair of
 /// registers sorted, ascending for even pairs, descending for odd ones; as [`runs8`],
-/// with Batcher's network for 16 (63 compare-exchanges).
+/// with Batcher's network for 16 ([`sort_columns16`]).
 #[inline(always)]
 fn runs16(simd: V4, v: &mut [u64x8; 16]) {
-    columns!(simd, v; 0 1; 2 3; 4 5; 6 7; 8 9; 10 11; 12 13; 14 15; 0 2; 1 3; 4 6; 5 7;
-        8 10; 9 11; 12 14; 13 15; 1 2; 5 6; 9 10; 13 14; 0 4; 1 5; 2 6; 3 7; 8 12; 9 13;
-        10 14; 11 15; 2 4; 3 5; 10 12; 11 13; 1 2; 3 4; 5 6; 9 10; 11 12; 13 14; 0 8; 1 9;
-        2 10; 3 11; 4 12; 5 13; 6 14; 7 15; 4 8; 5 9; 6 10; 7 11; 2 4; 3 5; 6 8; 7 9;
-        10 12; 11 13; 1 2; 3 4; 5 6; 7 8; 9 10; 11 12; 13 14;);
+    sort_columns16(simd, v);
     let mut upper = [v[0]; L];
     let mut lower = [v[0]; L];
     upper.copy_from_slice(&v[..L]);
@@ -463,6 +460,49 @@ fn runs16(simd: V4, v: &mut [u64x8; 16]) {
             (v[2 * c], v[2 * c + 1]) = (reverse(simd, lower[c]), reverse(simd, upper[c]));
         }
     }
+}
+
+/// [`HalfMaxLanes`] for 16 or 32 rows, column by column without transposing: each
+/// block of 16 rows sorted down its columns by [`sorted_columns`], two blocks' smaller
+/// half taken by one min against the other reversed, and its largest by a max (a
+/// third of the transposing path's work for these sizes).
+#[inline(always)]
+fn columns_half_max(simd: V4, keys: &[[u64; L]]) -> [u64; L] {
+    let a = sorted_columns(simd, &keys[..keys.len().min(16)]);
+    let half = if keys.len() == 16 {
+        a[7]
+    } else {
+        let b = sorted_columns(simd, &keys[16..]);
+        let mut top = simd.min_u64x8(a[0], b[15]);
+        for i in 1..16 {
+            top = simd.max_u64x8(top, simd.min_u64x8(a[i], b[15 - i]));
+        }
+        top
+    };
+    cast(half)
+}
+
+/// Up to 16 rows of eight lanes (padded with `u64::MAX`), each column sorted
+/// ([`sort_columns16`]).
+#[inline(always)]
+fn sorted_columns(simd: V4, rows: &[[u64; L]]) -> [u64x8; 16] {
+    let mut v = [simd.splat_u64x8(u64::MAX); 16];
+    for (v, row) in v.iter_mut().zip(rows) {
+        *v = cast(*row);
+    }
+    sort_columns16(simd, &mut v);
+    v
+}
+
+/// Sorts each column (lane) of the 16 registers `v` by Batcher's odd-even merge
+/// network: 63 compare-exchanges of whole registers.
+#[inline(always)]
+fn sort_columns16(simd: V4, v: &mut [u64x8; 16]) {
+    columns!(simd, v; 0 1; 2 3; 4 5; 6 7; 8 9; 10 11; 12 13; 14 15; 0 2; 1 3; 4 6; 5 7;
+        8 10; 9 11; 12 14; 13 15; 1 2; 5 6; 9 10; 13 14; 0 4; 1 5; 2 6; 3 7; 8 12; 9 13;
+        10 14; 11 15; 2 4; 3 5; 10 12; 11 13; 1 2; 3 4; 5 6; 9 10; 11 12; 13 14; 0 8; 1 9;
+        2 10; 3 11; 4 12; 5 13; 6 14; 7 15; 4 8; 5 9; 6 10; 7 11; 2 4; 3 5; 6 8; 7 9;
+        10 12; 11 13; 1 2; 3 4; 5 6; 7 8; 9 10; 11 12; 13 14;);
 }
 
 /// The lanes of `x` in reverse order.
