@@ -358,7 +358,7 @@ fn upper_sets(arch: pulp::Arch, scratch: &mut Scratch, count: usize, config: &Fe
 }
 
 /// Each lane's moments of `xyz` at every scale (`scales` largest first, into `out` in
-/// that order): [`Moments::add`] over the points in order, the scales' moments taken on
+/// that order): the points added one at a time, in order, the scales' moments taken on
 /// the way.
 struct PrefixSums<'a> {
     xyz: &'a [[Lanes; 3]],
@@ -516,7 +516,7 @@ fn near_key<S: Simd>(
 }
 
 /// Adds each lane's point `[x, y, z]` (register `r`) to its moments in `acc` (count,
-/// sums, outer products) where `keep` is set (everywhere for `None`): [`Moments::add`],
+/// sums, outer products) where `keep` is set (everywhere for `None`): one point at a time,
 /// lane by lane, so the same bits.
 #[inline(always)]
 fn add_lanes<S: Simd>(

@@ -96,7 +96,7 @@ impl Network {
 /// (sorted in `$r` registers by `$sort`), in order, into `$a`: the first `K - 8 $r` of
 /// `$a` are among them; with `min(a[K - 8 $r + t], b[8 $r - 1 - t])` after them, `$a`
 /// is a bitonic sequence (rising through `a`, falling through `b`), which
-/// [`merge128`] sorts. (A macro, like [`smaller_half!`].)
+/// [`merge128`] sorts. (A macro, like `half_max!`.)
 macro_rules! merge_rest {
     ($simd:expr, $keys:expr, $a:expr, $r:literal, $sort:ident) => {{
         let mut b: [u64x8; $r] = load_registers($keys, K);
