@@ -387,9 +387,9 @@ impl pulp::WithSimd for PrefixSums<'_> {
 }
 
 /// The keys of [`half_neighbourhoods`] into `keys`: each lane's squared distances of
-/// `xyz` to its `centre`, the rank in the `rank_bits`, side by side (the selection turns
-/// them into rows: written straight into each lane's row instead, the scattered stores
-/// cost 4%).
+/// `xyz` to its `centre`, the rank in the `rank_bits`, side by side, as the selection
+/// takes them (down the columns; written into a row per lane instead, the scattered
+/// stores cost 4%).
 struct Keys<'a> {
     xyz: &'a [[Lanes; 3]],
     centre: [Lanes; 3],

@@ -15,7 +15,9 @@
 //!   sorted at once) and a transpose: 1M cube 1.16 -> 1.10 s;
 //! - the smaller half of 16..128 keys (the normal's half neighbourhood): both halves
 //!   sorted, one min against the reversed other, of which the largest is the half's
-//!   threshold: ~4% faster than the quickselect;
+//!   threshold: ~4% faster than the quickselect; for eight points side by side (a
+//!   point per lane, keys down the columns), the sorts compare whole registers, all
+//!   eight points at once, which beat transposing the keys into rows by ~3%;
 //! - the distance filter, eight candidates per register, keys packed by a compress:
 //!   ~4.5% (7% on an airborne scan).
 //!
@@ -83,12 +85,11 @@ impl Network {
     }
 
     /// [`half_max`](Self::half_max) of each column of `keys` (rows of eight lanes, a
-    /// length that [`halves`](Self::halves) takes); `rows` is scratch.
-    pub(crate) fn half_max_lanes(self, keys: &[[u64; L]], rows: &mut Vec<u64>) -> [u64; L] {
+    /// length that [`halves`](Self::halves) takes).
+    pub(crate) fn half_max_lanes(self, keys: &[[u64; L]]) -> [u64; L] {
         assert!(Self::halves(keys.len()));
-        rows.resize(L * keys.len(), 0);
         let simd = self.0;
-        self.0.vectorize(HalfMaxLanes { simd, keys, rows })
+        self.0.vectorize(HalfMaxLanes { simd, keys })
     }
 }
 
@@ -190,12 +191,11 @@ impl NullaryFnOnce for HalfMax<'_> {
     }
 }
 
-/// The body of [`Network::half_max_lanes`], compiled for AVX-512: the columns become
-/// rows (eight keys at a time, by [`transpose`]), each row goes through `half_max!`.
+/// The body of [`Network::half_max_lanes`], compiled for AVX-512 (see
+/// [`columns_half_max`]).
 struct HalfMaxLanes<'a> {
     simd: V4,
     keys: &'a [[u64; L]],
-    rows: &'a mut [u64],
 }
 
 impl NullaryFnOnce for HalfMaxLanes<'_> {
@@ -203,32 +203,7 @@ impl NullaryFnOnce for HalfMaxLanes<'_> {
 
     #[inline(always)]
     fn call(self) -> [u64; L] {
-        let Self { simd, keys, rows } = self;
-        let n = keys.len();
-        if n <= 32 {
-            return columns_half_max(simd, keys);
-        }
-        let (blocks, _) = keys.as_chunks::<L>();
-        for (b, block) in blocks.iter().enumerate() {
-            let mut r = [simd.splat_u64x8(0); L];
-            for (r, row) in r.iter_mut().zip(block) {
-                *r = cast(*row);
-            }
-            let columns = transpose(simd, r);
-            for (l, column) in columns.iter().enumerate() {
-                let at = l * n + b * L;
-                rows[at..at + L].copy_from_slice(&cast::<u64x8, [u64; L]>(*column));
-            }
-        }
-        let mut out = [0; L];
-        for (o, row) in out.iter_mut().zip(rows.chunks_exact(n)) {
-            *o = match n {
-                64 => half_max!(simd, row, 4, sort32),
-                128 => half_max!(simd, row, 8, sort64),
-                n => unreachable!("no network for {n} keys"),
-            };
-        }
-        out
+        columns_half_max(self.simd, self.keys)
     }
 }
 
@@ -462,36 +437,56 @@ fn runs16(simd: V4, v: &mut [u64x8; 16]) {
     }
 }
 
-/// [`HalfMaxLanes`] for 16 or 32 rows, column by column without transposing: each
-/// block of 16 rows sorted down its columns by [`sorted_columns`], two blocks' smaller
-/// half taken by one min against the other reversed, and its largest by a max (a
-/// third of the transposing path's work for these sizes).
+/// [`HalfMaxLanes`] column by column, without transposing: blocks of 16 rows sorted
+/// down their columns ([`sort_columns16`]), merged pairwise ([`merge_columns`]) into
+/// two sorted halves, whose smaller half of the whole is one min against the other
+/// reversed, and its largest a max. Every step compares whole registers, all eight
+/// points at once.
 #[inline(always)]
 fn columns_half_max(simd: V4, keys: &[[u64; L]]) -> [u64; L] {
-    let a = sorted_columns(simd, &keys[..keys.len().min(16)]);
-    let half = if keys.len() == 16 {
-        a[7]
-    } else {
-        let b = sorted_columns(simd, &keys[16..]);
-        let mut top = simd.min_u64x8(a[0], b[15]);
-        for i in 1..16 {
-            top = simd.max_u64x8(top, simd.min_u64x8(a[i], b[15 - i]));
-        }
-        top
-    };
-    cast(half)
-}
-
-/// Up to 16 rows of eight lanes (padded with `u64::MAX`), each column sorted
-/// ([`sort_columns16`]).
-#[inline(always)]
-fn sorted_columns(simd: V4, rows: &[[u64; L]]) -> [u64x8; 16] {
-    let mut v = [simd.splat_u64x8(u64::MAX); 16];
-    for (v, row) in v.iter_mut().zip(rows) {
+    let n = keys.len();
+    let mut all = [simd.splat_u64x8(u64::MAX); K];
+    let v = &mut all[..n];
+    for (v, row) in v.iter_mut().zip(keys) {
         *v = cast(*row);
     }
-    sort_columns16(simd, &mut v);
-    v
+    for block in v.as_chunks_mut::<16>().0 {
+        sort_columns16(simd, block);
+    }
+    let mut size = 16;
+    while 2 * size < n {
+        for pair in v.chunks_exact_mut(2 * size) {
+            merge_columns(simd, pair);
+        }
+        size *= 2;
+    }
+    let mut top = simd.min_u64x8(v[0], v[n - 1]);
+    for i in 1..n / 2 {
+        top = simd.max_u64x8(top, simd.min_u64x8(v[i], v[n - 1 - i]));
+    }
+    cast(top)
+}
+
+/// Merges the two halves of `v`, each sorted down every column, into one sorted
+/// sequence: the halves compared head against tail, then a bitonic half-cleaner cascade
+/// within each half.
+#[inline(always)]
+fn merge_columns(simd: V4, v: &mut [u64x8]) {
+    let n = v.len();
+    for i in 0..n / 2 {
+        let (a, b) = (v[i], v[n - 1 - i]);
+        (v[i], v[n - 1 - i]) = (simd.min_u64x8(a, b), simd.max_u64x8(a, b));
+    }
+    let mut d = n / 4;
+    while d >= 1 {
+        for block in v.chunks_exact_mut(2 * d) {
+            for i in 0..d {
+                let (a, b) = (block[i], block[i + d]);
+                (block[i], block[i + d]) = (simd.min_u64x8(a, b), simd.max_u64x8(a, b));
+            }
+        }
+        d /= 2;
+    }
 }
 
 /// Sorts each column (lane) of the 16 registers `v` by Batcher's odd-even merge
@@ -558,12 +553,11 @@ mod tests {
             return;
         };
         let mut random = crate::test_stream(5);
-        let mut rows = Vec::new();
         for n in [16, 32, 64, 128] {
             let keys: Vec<[u64; L]> = (0..n as u64)
                 .map(|j| std::array::from_fn(|l| (random() >> 40) << 8 | j << 3 | l as u64))
                 .collect();
-            let got = network.half_max_lanes(&keys, &mut rows);
+            let got = network.half_max_lanes(&keys);
             for (l, got) in got.into_iter().enumerate() {
                 let mut column: Vec<u64> = keys.iter().map(|k| k[l]).collect();
                 column.sort_unstable();

@@ -21,7 +21,7 @@ pub struct SmallestFirst {
     network: Option<crate::network::Network>,
     /// The quickselect's copy of the keys.
     copy: Vec<u64>,
-    /// Columns of keys as rows.
+    /// A column of keys as a row, for the quickselect.
     rows: Vec<u64>,
 }
 
@@ -65,7 +65,7 @@ impl SmallestFirst {
             && crate::network::Network::halves(keys.len())
             && m == keys.len() / 2
         {
-            return network.half_max_lanes(keys, &mut self.rows);
+            return network.half_max_lanes(keys);
         }
         std::array::from_fn(|l| {
             let mut column = std::mem::take(&mut self.rows);
