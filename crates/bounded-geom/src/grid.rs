@@ -26,6 +26,8 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use crate::morton::{BITS, Quantiser, code};
 use crate::select::{Filter, Selection, key_distance, key_index};
 
@@ -102,7 +104,11 @@ impl Grid {
     /// on a surface the k-th neighbour then lies about 1.4 cells away, inside the
     /// shared box of `RING` = 2 cells.
     pub(crate) fn new(s: &Sorted<'_>, k: usize) -> Self {
-        let codes: Vec<u64> = s.points.iter().map(|p| code(s.quant.cell(*p))).collect();
+        let codes: Vec<u64> = s
+            .points
+            .par_iter()
+            .map(|p| code(s.quant.cell(*p)))
+            .collect();
         // Consecutive codes first differ at bit b: different cells at levels <= b / 3.
         let mut split_at = [0usize; BITS as usize + 1];
         for w in codes.windows(2) {

@@ -73,11 +73,13 @@ impl KnnIndex {
         }
         let quant = Quantiser::new(cloud_points);
         let sorted = sorted_codes(cloud_points, &quant);
+        // In parallel: reading the points in Morton order misses the cache at every point
+        // of a randomly ordered cloud.
         let points = sorted
-            .iter()
+            .par_iter()
             .map(|&(_, i)| cloud_points[i as usize])
             .collect();
-        let order = sorted.into_iter().map(|(_, i)| i).collect();
+        let order = sorted.par_iter().map(|&(_, i)| i).collect();
         Ok(Self {
             quant,
             points,
