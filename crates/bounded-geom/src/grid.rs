@@ -372,14 +372,13 @@ impl Candidates {
     fn best(&self, p: [f32; 3], q: u32, lim: f32, sel: &mut Selection, out: &mut [u32]) -> bool {
         let k = out.len();
         sel.clear();
-        // Skips boxes whose every point is beyond the limit (with a rounding margin).
-        let beyond = |b: &Box3| box_distance2(p, b) * (1.0 - MARGIN) >= f64::from(lim);
         let ranges = &mut sel.ranges;
         ranges.clear();
         let mut first_piece = 0;
         for (last_piece, group) in &self.groups {
             let pieces = std::mem::replace(&mut first_piece, *last_piece)..*last_piece;
-            if beyond(group) {
+            // Skips groups, then pieces, whose every point is beyond the limit.
+            if beyond(p, group, lim) {
                 continue;
             }
             let near = &mut sel.near;
@@ -395,16 +394,13 @@ impl Candidates {
                 }
             }
         }
-        let ranges = std::mem::take(&mut sel.ranges);
         sel.keep_ranges(Filter {
             p,
             q,
             lim,
             xyz: (&self.xs, &self.ys, &self.zs),
             index: &self.index,
-            ranges: &ranges,
         });
-        sel.ranges = ranges;
         if sel.kept() < k {
             return false;
         }
@@ -417,19 +413,22 @@ impl Candidates {
 }
 
 /// Whether each of the boxes `[lower x, y, z, upper x, y, z]` may hold points within
-/// squared distance `lim` of `p`, into `near`: [`box_distance2`] with its rounding
-/// margin, for all boxes in one loop that vectorises (a test and a branch per box
-/// cost ~4% of `detect`).
+/// squared distance `lim` of `p` (not [`beyond`]), into `near`, for all boxes in one
+/// loop that vectorises (a test and a branch per box cost ~4% of `detect`).
 fn near_boxes(p: [f32; 3], lim: f32, boxes: [&[f64]; 6], near: &mut [bool]) {
     let n = near.len();
-    let boxes = boxes.map(|b| &b[..n]);
-    let p = p.map(f64::from);
-    let lim = f64::from(lim);
+    let [lx, ly, lz, hx, hy, hz] = boxes.map(|b| &b[..n]);
     for (i, near) in near.iter_mut().enumerate() {
-        let d = |a: usize| (boxes[a][i] - p[a]).max(p[a] - boxes[a + 3][i]).max(0.0);
-        let (dx, dy, dz) = (d(0), d(1), d(2));
-        *near = (dx * dx + dy * dy + dz * dz) * (1.0 - MARGIN) < lim;
+        let b = ([lx[i], ly[i], lz[i]], [hx[i], hy[i], hz[i]]);
+        *near = !beyond(p, &b, lim);
     }
+}
+
+/// Whether every point of box `b` is beyond squared distance `lim` of `p`, with a
+/// rounding margin.
+#[inline(always)]
+fn beyond(p: [f32; 3], b: &Box3, lim: f32) -> bool {
+    box_distance2(p, b) * (1.0 - MARGIN) >= f64::from(lim)
 }
 
 /// Squared distance from `p` to the nearest point of box `b` (0 inside).

@@ -28,6 +28,7 @@
 //! intrinsics become calls and the code runs 5x slower.
 
 use std::arch::x86_64::{__m256, __m512i, _CMP_LT_OQ};
+use std::ops::Range;
 
 use pulp::x86::V4;
 
@@ -62,11 +63,18 @@ impl Network {
     /// the candidates `ranges`, eight at a time and the rest one by one, in one call:
     /// writes the kept keys to `out` from `kept` on (overwriting up to a register
     /// beyond them) and returns the new count. Distances are computed exactly as there.
-    pub(crate) fn keep_ranges(self, filter: Filter<'_>, out: &mut [u64], kept: usize) -> usize {
+    pub(crate) fn keep_ranges(
+        self,
+        filter: Filter<'_>,
+        ranges: &[Range<usize>],
+        out: &mut [u64],
+        kept: usize,
+    ) -> usize {
         let simd = self.0;
         self.0.vectorize(KeepRanges {
             simd,
             filter,
+            ranges,
             out,
             kept,
         })
@@ -247,6 +255,7 @@ fn transpose(simd: V4, r: [u64x8; L]) -> [u64x8; L] {
 struct KeepRanges<'a> {
     simd: V4,
     filter: Filter<'a>,
+    ranges: &'a [Range<usize>],
     out: &'a mut [u64],
     kept: usize,
 }
@@ -259,6 +268,7 @@ impl NullaryFnOnce for KeepRanges<'_> {
         let Self {
             simd,
             filter,
+            ranges,
             out,
             mut kept,
         } = self;
@@ -268,7 +278,6 @@ impl NullaryFnOnce for KeepRanges<'_> {
             lim,
             xyz: (xs, ys, zs),
             index,
-            ranges,
         } = filter;
         let (avx, avx512) = (simd.avx, simd.avx512f);
         let (px, py, pz) = (

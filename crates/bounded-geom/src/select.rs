@@ -21,7 +21,7 @@
 
 use std::ops::Range;
 
-/// A query of the distance filter: the candidates `ranges` of the structure-of-arrays
+/// A query of the distance filter: the candidates among the structure-of-arrays
 /// coordinates `xyz` (original indices `index`) within squared distance `lim` of `p`,
 /// whose own index is `q`.
 #[derive(Clone, Copy)]
@@ -31,7 +31,6 @@ pub(crate) struct Filter<'a> {
     pub(crate) lim: f32,
     pub(crate) xyz: (&'a [f32], &'a [f32], &'a [f32]),
     pub(crate) index: &'a [u32],
-    pub(crate) ranges: &'a [Range<usize>],
 }
 
 impl Filter<'_> {
@@ -62,7 +61,7 @@ pub(crate) struct Selection {
     /// Keys of the candidates kept so far (the first `kept`), then the sorted result.
     keys: Vec<u64>,
     kept: usize,
-    /// The candidate ranges a query filters (reused from query to query).
+    /// The candidate ranges the next [`keep_ranges`](Self::keep_ranges) filters.
     pub(crate) ranges: Vec<Range<usize>>,
     /// Which pieces of a group a query filters (reused).
     pub(crate) near: Vec<bool>,
@@ -96,21 +95,21 @@ impl Selection {
         self.kept
     }
 
-    /// Keeps the candidates of `filter` whose squared distance to its point is below
-    /// its limit.
+    /// Keeps the candidates of `ranges` whose squared distance to the
+    /// point of `filter` is below its limit.
     pub(crate) fn keep_ranges(&mut self, filter: Filter<'_>) {
         // Room for a whole register of keys past the last one kept.
-        let candidates: usize = filter.ranges.iter().map(|r| r.len()).sum();
+        let candidates: usize = self.ranges.iter().map(|r| r.len()).sum();
         let need = self.kept + candidates + 8;
         if self.keys.len() < need {
             self.keys.resize(need, 0);
         }
         #[cfg(target_arch = "x86_64")]
         if let Some(network) = self.network {
-            self.kept = network.keep_ranges(filter, &mut self.keys, self.kept);
+            self.kept = network.keep_ranges(filter, &self.ranges, &mut self.keys, self.kept);
             return;
         }
-        for r in filter.ranges {
+        for r in &self.ranges {
             self.kept = filter.keep_one_by_one(r.clone(), &mut self.keys, self.kept);
         }
     }
@@ -186,14 +185,13 @@ mod tests {
         let zs: Vec<f32> = pts.iter().map(|x| x[2]).collect();
         let index: Vec<u32> = (0..pts.len() as u32).collect();
         let (m, n) = (pts.len() / 3, pts.len());
-        let ranges = [0..m, m..m + 5, m + 5..n];
+        s.ranges = vec![0..m, m..m + 5, m + 5..n];
         s.keep_ranges(Filter {
             p,
             q,
             lim,
             xyz: (&xs, &ys, &zs),
             index: &index,
-            ranges: &ranges,
         });
         (s.kept() >= k).then(|| {
             s.select(k);
