@@ -13,11 +13,12 @@
 //!   and 64-key sorts (up to sorted runs of 16 or 8, the rounds that permute within
 //!   registers) are replaced by Batcher's network on whole registers (every column
 //!   sorted at once) and a transpose: 1M cube 1.16 -> 1.10 s;
-//! - the smaller half of 16..128 keys (the normal's half neighbourhood): both halves
-//!   sorted, one min against the reversed other, of which the largest is the half's
-//!   threshold: ~4% faster than the quickselect; for eight points side by side (a
-//!   point per lane, keys down the columns), the sorts compare whole registers, all
-//!   eight points at once, which beat transposing the keys into rows by ~3%;
+//! - the smaller half of 16..128 keys of eight points side by side (the normals' half
+//!   neighbourhoods; a point per lane, keys down the columns): blocks of 16 rows
+//!   sorted by Batcher's network, merged, one half's min against the other reversed,
+//!   whose largest is the threshold. The sorts compare whole registers, all eight
+//!   points at once: ~3% faster than transposing the keys into rows and sorting each
+//!   point's (which had been ~4% faster than the quickselect);
 //! - the distance filter, eight candidates per register, keys packed by a compress:
 //!   ~4.5% (7% on an airborne scan).
 //!
@@ -80,20 +81,14 @@ impl Network {
         })
     }
 
-    /// Whether [`half_max`](Self::half_max) takes `n` keys.
+    /// Whether [`half_max_lanes`](Self::half_max_lanes) takes `n` keys.
     pub(crate) fn halves(n: usize) -> bool {
         matches!(n, 16 | 32 | 64 | 128)
     }
 
-    /// The largest of the smaller half of `keys` (distinct, a length that
-    /// [`halves`](Self::halves) takes): the keys at or below it are that half.
-    pub(crate) fn half_max(self, keys: &[u64]) -> u64 {
-        assert!(Self::halves(keys.len()));
-        self.0.vectorize(HalfMax { simd: self.0, keys })
-    }
-
-    /// [`half_max`](Self::half_max) of each column of `keys` (rows of eight lanes, a
-    /// length that [`halves`](Self::halves) takes).
+    /// The largest of the smaller half of each column of `keys` (rows of eight lanes,
+    /// distinct down each column, a length that [`halves`](Self::halves) takes): the
+    /// keys at or below it are that half.
     pub(crate) fn half_max_lanes(self, keys: &[[u64; L]]) -> [u64; L] {
         assert!(Self::halves(keys.len()));
         let simd = self.0;
@@ -105,7 +100,8 @@ impl Network {
 /// (sorted in `$r` registers by `$sort`), in order, into `$a`: the first `K - 8 $r` of
 /// `$a` are among them; with `min(a[K - 8 $r + t], b[8 $r - 1 - t])` after them, `$a`
 /// is a bitonic sequence (rising through `a`, falling through `b`), which
-/// [`merge128`] sorts. (A macro, like `half_max!`.)
+/// [`merge128`] sorts. (A macro: a sort passed as a function value is not inlined,
+/// and its intrinsics become calls.)
 macro_rules! merge_rest {
     ($simd:expr, $keys:expr, $a:expr, $r:literal, $sort:ident) => {{
         let mut b: [u64x8; $r] = load_registers($keys, K);
@@ -146,56 +142,8 @@ impl NullaryFnOnce for SmallestSorted<'_> {
 /// smallest of both, as a bitonic sequence.
 #[inline(always)]
 fn keep_smaller(simd: V4, a: &mut [u64x8], b: &[u64x8]) {
-    let reverse: __m512i = cast([7u64, 6, 5, 4, 3, 2, 1, 0]);
     for (x, y) in a.iter_mut().zip(b.iter().rev()) {
-        let flipped = cast(simd.avx512f._mm512_permutexvar_epi64(reverse, cast(*y)));
-        *x = simd.min_u64x8(*x, flipped);
-    }
-}
-
-/// The largest of the smaller half of the `16 R` keys in `keys`: both halves sorted by
-/// `$sort`, then [`keep_smaller`]. (A macro: a sort passed as a function value is not
-/// inlined, and its intrinsics become calls.)
-macro_rules! half_max {
-    ($simd:expr, $keys:expr, $r:literal, $sort:ident) => {{
-        let (simd, keys) = ($simd, $keys);
-        let mut a: [u64x8; $r] = load_registers(keys, 0);
-        let mut b: [u64x8; $r] = load_registers(keys, $r * L);
-        $sort(simd, &mut a);
-        $sort(simd, &mut b);
-        keep_smaller(simd, &mut a, &b);
-        let mut top = a[0];
-        for x in &a[1..] {
-            top = simd.max_u64x8(top, *x);
-        }
-        let lanes: [u64; L] = cast(top);
-        let mut max = lanes[0];
-        for &x in &lanes[1..] {
-            max = max.max(x);
-        }
-        max
-    }};
-}
-
-/// The body of [`Network::half_max`], compiled for AVX-512.
-struct HalfMax<'a> {
-    simd: V4,
-    keys: &'a [u64],
-}
-
-impl NullaryFnOnce for HalfMax<'_> {
-    type Output = u64;
-
-    #[inline(always)]
-    fn call(self) -> u64 {
-        let Self { simd, keys } = self;
-        match keys.len() {
-            16 => half_max!(simd, keys, 1, sort8),
-            32 => half_max!(simd, keys, 2, sort16),
-            64 => half_max!(simd, keys, 4, sort32),
-            128 => half_max!(simd, keys, 8, sort64),
-            n => unreachable!("no network for {n} keys"),
-        }
+        *x = simd.min_u64x8(*x, reverse(simd, *y));
     }
 }
 

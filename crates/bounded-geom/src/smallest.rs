@@ -1,15 +1,16 @@
-//! Moving the `m` smallest of a set of keys to the front, the selection behind the
-//! features' half neighbourhoods.
+//! The `m`-th smallest of a set of keys: the threshold of the features' half
+//! neighbourhoods.
 
 use std::cmp::Ordering;
 
 /// The `m`-th smallest of a set of distinct `u64` keys: the threshold at or below which
 /// the `m` smallest lie.
 ///
-/// For the smaller half of 16, 32, 64 or 128 keys, AVX-512 sorting networks find it
-/// when the CPU has them (checked once, when the selector is made); anything else a
-/// quickselect with branch-free partitions, on a copy. The result is the same either
-/// way.
+/// A quickselect with branch-free partitions, on a copy; for the smaller half of 16,
+/// 32, 64 or 128 keys of eight lanes side by side
+/// ([`nth_smallest_lanes`](Self::nth_smallest_lanes)), AVX-512 sorting networks when the
+/// CPU has them (checked once, when the selector is made). The result is the same
+/// either way.
 ///
 /// ```
 /// use bounded_geom::SmallestFirst;
@@ -21,8 +22,6 @@ pub struct SmallestFirst {
     network: Option<crate::network::Network>,
     /// The quickselect's copy of the keys.
     copy: Vec<u64>,
-    /// A column of keys as a row, for the quickselect.
-    rows: Vec<u64>,
 }
 
 impl Default for SmallestFirst {
@@ -38,7 +37,6 @@ impl SmallestFirst {
             #[cfg(target_arch = "x86_64")]
             network: crate::network::Network::detect(),
             copy: Vec::new(),
-            rows: Vec::new(),
         }
     }
 
@@ -46,14 +44,9 @@ impl SmallestFirst {
     /// `m >= keys.len()`. Panics for no keys or `m = 0`.
     pub fn nth_smallest(&mut self, keys: &[u64], m: usize) -> u64 {
         assert!(m > 0 && !keys.is_empty(), "no keys to choose from");
-        #[cfg(target_arch = "x86_64")]
-        if let Some(network) = self.network
-            && crate::network::Network::halves(keys.len())
-            && m == keys.len() / 2
-        {
-            return network.half_max(keys);
-        }
-        self.quickselect(keys, m)
+        self.copy.clear();
+        self.copy.extend_from_slice(keys);
+        nth_of_copy(&mut self.copy, m)
     }
 
     /// [`nth_smallest`](Self::nth_smallest) of each of the eight columns of `keys` (rows
@@ -68,27 +61,22 @@ impl SmallestFirst {
             return network.half_max_lanes(keys);
         }
         std::array::from_fn(|l| {
-            let mut column = std::mem::take(&mut self.rows);
-            column.clear();
-            column.extend(keys.iter().map(|k| k[l]));
-            let nth = self.quickselect(&column, m);
-            self.rows = column;
-            nth
+            self.copy.clear();
+            self.copy.extend(keys.iter().map(|k| k[l]));
+            nth_of_copy(&mut self.copy, m)
         })
-    }
-
-    /// [`nth_smallest`](Self::nth_smallest) by [`quickselect`] on a copy.
-    fn quickselect(&mut self, keys: &[u64], m: usize) -> u64 {
-        let m = m.min(keys.len());
-        self.copy.clear();
-        self.copy.extend_from_slice(keys);
-        quickselect(&mut self.copy, m);
-        self.copy[..m].iter().copied().max().unwrap_or(0)
     }
 }
 
-/// Moves the `m` smallest of `keys` to the front: [`SmallestFirst::nth_smallest`]
-/// without AVX-512.
+/// The `m`-th smallest of `keys` (not empty, `m > 0`; the largest when `m` exceeds
+/// them), which [`quickselect`] reorders.
+fn nth_of_copy(keys: &mut [u64], m: usize) -> u64 {
+    let m = m.min(keys.len());
+    quickselect(keys, m);
+    keys[..m].iter().copied().max().unwrap_or(0)
+}
+
+/// Moves the `m` smallest of `keys` to the front.
 ///
 /// Quickselect with branch-free Lomuto partitions: which side a key falls on is
 /// unpredictable, so an unconditional swap costs less than a branch. The pivot is the
