@@ -1,0 +1,197 @@
+//! How the noisy ABC sample was made, and what that noise leaves to find: for each cloud
+//! present in both a clean and a noisy PCEDNet directory (same points, same order), the
+//! displacement of every point split along and across the file's normal (in units of the
+//! clean median spacing), and the MCC of a crease-line oracle: a detector that knows the
+//! exact crease lines (the line through the two clean sharp points nearest to each noisy
+//! point) and calls a noisy point sharp when it lies within `t` spacings of it, `t` the best
+//! of a few. The normals are read only for this study, never as features.
+//!
+//! `cargo run --release -p bounded-data --example noise_study -- \
+//!     ../shared/datasets/pcednet/abc ../shared/datasets/pcednet/abc_noise_0.04`
+
+use bounded_data::dataset::cloud_files;
+use bounded_data::labels::{Convention, load};
+use bounded_data::{LabelledCloud, format};
+use bounded_geom::{Class, KnnIndex};
+use std::path::{Path, PathBuf};
+
+type V3 = [f64; 3];
+
+/// Neighbours searched for the clean sharp points nearest to a noisy point.
+const K: usize = 32;
+/// Oracle thresholds tried, in spacings.
+const THRESHOLDS: [f64; 8] = [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0];
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let usage = "usage: noise_study CLEAN_DIR NOISY_DIR";
+    let clean_dir = PathBuf::from(args.next().ok_or(usage)?);
+    let noisy_dir = PathBuf::from(args.next().ok_or(usage)?);
+    println!("| cloud | points | along normal | across normal | oracle MCC | at t |");
+    println!("|---|---|---|---|---|---|");
+    let mut oracle = Vec::new();
+    for clean_path in cloud_files(&clean_dir)? {
+        let noisy_path = noisy_dir.join(clean_path.file_name().ok_or("bad file name")?);
+        if !noisy_path.exists() {
+            continue;
+        }
+        let study = study(&clean_path, &noisy_path)?;
+        println!(
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {} |",
+            clean_path.file_stem().unwrap_or_default().to_string_lossy(),
+            study.points,
+            study.along,
+            study.across,
+            study.oracle_mcc,
+            study.threshold
+        );
+        oracle.push(study.oracle_mcc);
+    }
+    println!("median oracle MCC: {:.3}", median(&mut oracle));
+    Ok(())
+}
+
+struct Study {
+    points: usize,
+    /// Median |displacement . normal| / spacing.
+    along: f64,
+    /// Median length of the displacement's rest / spacing.
+    across: f64,
+    oracle_mcc: f64,
+    threshold: f64,
+}
+
+fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::error::Error>> {
+    let clean = load(clean_path, Convention::PCEDNET)?;
+    let noisy = load(noisy_path, Convention::PCEDNET)?;
+    if clean.labels != noisy.labels {
+        return Err(format!(
+            "{}: labels differ from the clean cloud",
+            noisy_path.display()
+        )
+        .into());
+    }
+    let table = format::read(clean_path)?;
+    let normal = |name: &str| {
+        table
+            .property(name)
+            .ok_or_else(|| format!("{}: no {name}", clean_path.display()))
+    };
+    let (nx, ny, nz) = (normal("nx")?, normal("ny")?, normal("nz")?);
+    let (c, p) = (positions(&clean), positions(&noisy));
+    let neighbours = neighbours(&clean)?;
+    let spacing = {
+        let mut nearest: Vec<f64> = (0..c.len())
+            .map(|i| dist(c[i], c[neighbours[i * K + 1] as usize]))
+            .collect();
+        median(&mut nearest)
+    };
+    let (mut along, mut across) = (Vec::new(), Vec::new());
+    for i in 0..c.len() {
+        let n = unit([nx.get_f64(i), ny.get_f64(i), nz.get_f64(i)]);
+        let d = sub(p[i], c[i]);
+        let a = dot(d, n);
+        along.push(a.abs() / spacing);
+        across.push((dot(d, d) - a * a).max(0.0).sqrt() / spacing);
+    }
+    let offsets: Vec<f64> = (0..c.len())
+        .map(|i| crease_distance(&clean, &c, &neighbours[i * K..(i + 1) * K], p[i]) / spacing)
+        .collect();
+    let (oracle_mcc, threshold) = THRESHOLDS
+        .iter()
+        .map(|&t| (mcc(&offsets, &clean.labels, t), t))
+        .fold(
+            (f64::NEG_INFINITY, 0.0),
+            |a, b| if b.0 > a.0 { b } else { a },
+        );
+    Ok(Study {
+        points: c.len(),
+        along: median(&mut along),
+        across: median(&mut across),
+        oracle_mcc,
+        threshold,
+    })
+}
+
+/// Distance from `q` to the line through the two clean sharp points nearest to it among
+/// `neighbours` (to the one point when there is one, infinite when there is none).
+fn crease_distance(clean: &LabelledCloud, c: &[V3], neighbours: &[u32], q: V3) -> f64 {
+    let mut sharp: Vec<(f64, usize)> = neighbours
+        .iter()
+        .map(|&j| j as usize)
+        .filter(|&j| clean.labels[j] == Class::Sharp)
+        .map(|j| (dist(q, c[j]), j))
+        .collect();
+    sharp.sort_by(|a, b| a.0.total_cmp(&b.0));
+    match sharp[..] {
+        [] => f64::INFINITY,
+        [(d, _)] => d,
+        [(_, a), (_, b), ..] => {
+            let ab = sub(c[b], c[a]);
+            let aq = sub(q, c[a]);
+            let cross = [
+                ab[1] * aq[2] - ab[2] * aq[1],
+                ab[2] * aq[0] - ab[0] * aq[2],
+                ab[0] * aq[1] - ab[1] * aq[0],
+            ];
+            dot(cross, cross).sqrt() / dot(ab, ab).sqrt()
+        }
+    }
+}
+
+/// MCC of "sharp when `offset < t`" against `labels`.
+fn mcc(offsets: &[f64], labels: &[Class], t: f64) -> f64 {
+    let mut m = [[0.0f64; 2]; 2];
+    for (&o, &l) in offsets.iter().zip(labels) {
+        m[usize::from(l == Class::Sharp)][usize::from(o < t)] += 1.0;
+    }
+    let [[tn, fp], [fn_, tp]] = m;
+    let denominator = ((tp + fp) * (tp + fn_) * (tn + fp) * (tn + fn_)).sqrt();
+    if denominator > 0.0 {
+        (tp * tn - fp * fn_) / denominator
+    } else {
+        0.0
+    }
+}
+
+/// The `K` nearest clean neighbours of every point, rows in cloud order.
+fn neighbours(clean: &LabelledCloud) -> Result<Vec<u32>, Box<dyn std::error::Error>> {
+    let index = KnnIndex::new(&clean.cloud)?;
+    let mut rows = vec![0u32; clean.cloud.len() * K];
+    index.for_each_chunk(K, 16_384, |chunk| {
+        for (row, &query) in chunk.queries().iter().enumerate() {
+            let query = query as usize;
+            rows[query * K..(query + 1) * K].copy_from_slice(chunk.row(row));
+        }
+    })?;
+    Ok(rows)
+}
+
+fn positions(labelled: &LabelledCloud) -> Vec<V3> {
+    (0..labelled.cloud.len())
+        .map(|i| labelled.cloud.position_f64(i))
+        .collect()
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn dist(a: V3, b: V3) -> f64 {
+    let d = sub(a, b);
+    dot(d, d).sqrt()
+}
+
+fn unit(v: V3) -> V3 {
+    let l = dot(v, v).sqrt();
+    [v[0] / l, v[1] / l, v[2] / l]
+}
