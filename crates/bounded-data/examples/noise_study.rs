@@ -10,9 +10,11 @@
 //!     ../shared/datasets/pcednet/abc ../shared/datasets/pcednet/abc_noise_0.04`
 
 use bounded_data::dataset::cloud_files;
-use bounded_data::labels::{Convention, load};
+use bounded_data::labels::{Convention, from_table, load};
+use bounded_data::table::PointTable;
 use bounded_data::{LabelledCloud, format};
-use bounded_geom::{Class, KnnIndex};
+use bounded_geom::{Class, KnnIndex, cross, dot};
+use bounded_nn::{BinaryConfusion, median};
 use std::path::{Path, PathBuf};
 
 type V3 = [f64; 3];
@@ -47,7 +49,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         oracle.push(study.oracle_mcc);
     }
-    println!("median oracle MCC: {:.3}", median(&mut oracle));
+    println!(
+        "median oracle MCC: {:.3}",
+        median(&oracle).unwrap_or(f64::NAN)
+    );
     Ok(())
 }
 
@@ -62,7 +67,9 @@ struct Study {
 }
 
 fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::error::Error>> {
-    let clean = load(clean_path, Convention::PCEDNET)?;
+    let table = format::read(clean_path)?;
+    let normals = unit_normals(&table, clean_path)?;
+    let clean = from_table(table, Convention::PCEDNET, clean_path)?;
     let noisy = load(noisy_path, Convention::PCEDNET)?;
     if clean.labels != noisy.labels {
         return Err(format!(
@@ -71,24 +78,14 @@ fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::err
         )
         .into());
     }
-    let table = format::read(clean_path)?;
-    let normal = |name: &str| {
-        table
-            .property(name)
-            .ok_or_else(|| format!("{}: no {name}", clean_path.display()))
-    };
-    let (nx, ny, nz) = (normal("nx")?, normal("ny")?, normal("nz")?);
     let (c, p) = (positions(&clean), positions(&noisy));
     let neighbours = neighbours(&clean)?;
-    let spacing = {
-        let mut nearest: Vec<f64> = (0..c.len())
-            .map(|i| dist(c[i], c[neighbours[i * K + 1] as usize]))
-            .collect();
-        median(&mut nearest)
-    };
+    let nearest: Vec<f64> = (0..c.len())
+        .map(|i| dist(c[i], c[neighbours[i * K + 1] as usize]))
+        .collect();
+    let spacing = median(&nearest).ok_or("empty cloud")?;
     let (mut along, mut across) = (Vec::new(), Vec::new());
-    for i in 0..c.len() {
-        let n = unit([nx.get_f64(i), ny.get_f64(i), nz.get_f64(i)]);
+    for (i, &n) in normals.iter().enumerate() {
         let d = sub(p[i], c[i]);
         let a = dot(d, n);
         along.push(a.abs() / spacing);
@@ -106,8 +103,8 @@ fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::err
         );
     Ok(Study {
         points: c.len(),
-        along: median(&mut along),
-        across: median(&mut across),
+        along: median(&along).unwrap_or(f64::NAN),
+        across: median(&across).unwrap_or(f64::NAN),
         oracle_mcc,
         threshold,
     })
@@ -129,29 +126,37 @@ fn crease_distance(clean: &LabelledCloud, c: &[V3], neighbours: &[u32], q: V3) -
         [(_, a), (_, b), ..] => {
             let ab = sub(c[b], c[a]);
             let aq = sub(q, c[a]);
-            let cross = [
-                ab[1] * aq[2] - ab[2] * aq[1],
-                ab[2] * aq[0] - ab[0] * aq[2],
-                ab[0] * aq[1] - ab[1] * aq[0],
-            ];
-            dot(cross, cross).sqrt() / dot(ab, ab).sqrt()
+            let normal = cross(ab, aq);
+            dot(normal, normal).sqrt() / dot(ab, ab).sqrt()
         }
     }
 }
 
 /// MCC of "sharp when `offset < t`" against `labels`.
 fn mcc(offsets: &[f64], labels: &[Class], t: f64) -> f64 {
-    let mut m = [[0.0f64; 2]; 2];
+    let mut counts = BinaryConfusion::default();
     for (&o, &l) in offsets.iter().zip(labels) {
-        m[usize::from(l == Class::Sharp)][usize::from(o < t)] += 1.0;
+        *match (l == Class::Sharp, o < t) {
+            (true, true) => &mut counts.tp,
+            (false, true) => &mut counts.fp,
+            (false, false) => &mut counts.tn,
+            (true, false) => &mut counts.fn_,
+        } += 1;
     }
-    let [[tn, fp], [fn_, tp]] = m;
-    let denominator = ((tp + fp) * (tp + fn_) * (tn + fp) * (tn + fn_)).sqrt();
-    if denominator > 0.0 {
-        (tp * tn - fp * fn_) / denominator
-    } else {
-        0.0
-    }
+    counts.mcc()
+}
+
+/// The file's normals (`nx`, `ny`, `nz`), scaled to unit length.
+fn unit_normals(table: &PointTable, path: &Path) -> Result<Vec<V3>, String> {
+    let column = |name: &str| {
+        table
+            .property(name)
+            .ok_or_else(|| format!("{}: no {name}", path.display()))
+    };
+    let (nx, ny, nz) = (column("nx")?, column("ny")?, column("nz")?);
+    Ok((0..table.len())
+        .map(|i| unit([nx.get_f64(i), ny.get_f64(i), nz.get_f64(i)]))
+        .collect())
 }
 
 /// The `K` nearest clean neighbours of every point, rows in cloud order.
@@ -173,17 +178,8 @@ fn positions(labelled: &LabelledCloud) -> Vec<V3> {
         .collect()
 }
 
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn dist(a: V3, b: V3) -> f64 {
