@@ -1,10 +1,13 @@
 //! How the noisy ABC sample was made, and what that noise leaves to find: for each cloud
 //! present in both a clean and a noisy PCEDNet directory (same points, same order), the
 //! displacement of every point split along and across the file's normal (in units of the
-//! clean median spacing), and the MCC of a crease-line oracle: a detector that knows the
-//! exact crease lines (the line through the two clean sharp points nearest to each noisy
-//! point) and calls a noisy point sharp when it lies within `t` spacings of it, `t` the best
-//! of a few. The normals are read only for this study, never as features.
+//! clean median spacing), and the MCC of two oracles that call a noisy point sharp when it
+//! lies within `t` spacings of the exact crease line (the line through the two clean sharp
+//! points nearest to it), `t` the best of a few: one measures that distance as it is, the
+//! other across the point's true normal (the part along it dropped). The first knows the
+//! creases only; the second knows the surface too, and since the noise moves points along
+//! their normals, it sees the clean offsets. The normals are read only for this study, never
+//! as features.
 //!
 //! `cargo run --release -p bounded-data --example noise_study -- \
 //!     ../shared/datasets/pcednet/abc ../shared/datasets/pcednet/abc_noise_0.04`
@@ -22,16 +25,18 @@ type V3 = [f64; 3];
 /// Neighbours searched for the clean sharp points nearest to a noisy point.
 const K: usize = 32;
 /// Oracle thresholds tried, in spacings.
-const THRESHOLDS: [f64; 8] = [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0];
+const THRESHOLDS: [f64; 9] = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0];
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let usage = "usage: noise_study CLEAN_DIR NOISY_DIR";
     let clean_dir = PathBuf::from(args.next().ok_or(usage)?);
     let noisy_dir = PathBuf::from(args.next().ok_or(usage)?);
-    println!("| cloud | points | along normal | across normal | oracle MCC | at t |");
+    println!(
+        "| cloud | points | along normal | across normal | line oracle MCC (t) | line and normal oracle MCC (t) |"
+    );
     println!("|---|---|---|---|---|---|");
-    let mut oracle = Vec::new();
+    let (mut line, mut line_and_normal) = (Vec::new(), Vec::new());
     for clean_path in cloud_files(&clean_dir)? {
         let noisy_path = noisy_dir.join(clean_path.file_name().ok_or("bad file name")?);
         if !noisy_path.exists() {
@@ -39,19 +44,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let study = study(&clean_path, &noisy_path)?;
         println!(
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {} |",
+            "| {} | {} | {:.3} | {:.3} | {:.3} ({}) | {:.3} ({}) |",
             clean_path.file_stem().unwrap_or_default().to_string_lossy(),
             study.points,
             study.along,
             study.across,
-            study.oracle_mcc,
-            study.threshold
+            study.line.mcc,
+            study.line.threshold,
+            study.line_and_normal.mcc,
+            study.line_and_normal.threshold
         );
-        oracle.push(study.oracle_mcc);
+        line.push(study.line.mcc);
+        line_and_normal.push(study.line_and_normal.mcc);
     }
     println!(
-        "median oracle MCC: {:.3}",
-        median(&oracle).unwrap_or(f64::NAN)
+        "median oracle MCC: {:.3} knowing the crease lines, {:.3} knowing the normals too",
+        median(&line).unwrap_or(f64::NAN),
+        median(&line_and_normal).unwrap_or(f64::NAN)
     );
     Ok(())
 }
@@ -62,7 +71,13 @@ struct Study {
     along: f64,
     /// Median length of the displacement's rest / spacing.
     across: f64,
-    oracle_mcc: f64,
+    line: Oracle,
+    line_and_normal: Oracle,
+}
+
+/// The best MCC of "sharp when the offset from the crease is below `threshold`".
+struct Oracle {
+    mcc: f64,
     threshold: f64,
 }
 
@@ -91,28 +106,44 @@ fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::err
         along.push(a.abs() / spacing);
         across.push((dot(d, d) - a * a).max(0.0).sqrt() / spacing);
     }
-    let offsets: Vec<f64> = (0..c.len())
-        .map(|i| crease_distance(&clean, &c, &neighbours[i * K..(i + 1) * K], p[i]) / spacing)
-        .collect();
-    let (oracle_mcc, threshold) = THRESHOLDS
-        .iter()
-        .map(|&t| (mcc(&offsets, &clean.labels, t), t))
-        .fold(
-            (f64::NEG_INFINITY, 0.0),
-            |a, b| if b.0 > a.0 { b } else { a },
-        );
+    let oracle = |normal: &dyn Fn(usize) -> Option<V3>| {
+        let offsets: Vec<f64> = (0..c.len())
+            .map(|i| {
+                let rows = &neighbours[i * K..(i + 1) * K];
+                crease_distance(&clean, &c, rows, p[i], normal(i)) / spacing
+            })
+            .collect();
+        THRESHOLDS
+            .iter()
+            .map(|&threshold| Oracle {
+                mcc: mcc(&offsets, &clean.labels, threshold),
+                threshold,
+            })
+            .fold(None, |a: Option<Oracle>, b| match a {
+                Some(a) if a.mcc >= b.mcc => Some(a),
+                _ => Some(b),
+            })
+            .expect("thresholds are not empty")
+    };
     Ok(Study {
         points: c.len(),
         along: median(&along).unwrap_or(f64::NAN),
         across: median(&across).unwrap_or(f64::NAN),
-        oracle_mcc,
-        threshold,
+        line: oracle(&|_| None),
+        line_and_normal: oracle(&|i| Some(normals[i])),
     })
 }
 
 /// Distance from `q` to the line through the two clean sharp points nearest to it among
-/// `neighbours` (to the one point when there is one, infinite when there is none).
-fn crease_distance(clean: &LabelledCloud, c: &[V3], neighbours: &[u32], q: V3) -> f64 {
+/// `neighbours` (to the one point when there is one, infinite when there is none),
+/// measured across `normal` when one is given (its part along `normal` dropped first).
+fn crease_distance(
+    clean: &LabelledCloud,
+    c: &[V3],
+    neighbours: &[u32],
+    q: V3,
+    normal: Option<V3>,
+) -> f64 {
     let mut sharp: Vec<(f64, usize)> = neighbours
         .iter()
         .map(|&j| j as usize)
@@ -120,12 +151,19 @@ fn crease_distance(clean: &LabelledCloud, c: &[V3], neighbours: &[u32], q: V3) -
         .map(|j| (dist(q, c[j]), j))
         .collect();
     sharp.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let across = |v: V3| match normal {
+        Some(n) => sub(v, scale(n, dot(v, n))),
+        None => v,
+    };
     match sharp[..] {
         [] => f64::INFINITY,
-        [(d, _)] => d,
+        [(_, a)] => {
+            let aq = across(sub(q, c[a]));
+            dot(aq, aq).sqrt()
+        }
         [(_, a), (_, b), ..] => {
             let ab = sub(c[b], c[a]);
-            let aq = sub(q, c[a]);
+            let aq = across(sub(q, c[a]));
             let normal = cross(ab, aq);
             dot(normal, normal).sqrt() / dot(ab, ab).sqrt()
         }
@@ -180,6 +218,10 @@ fn positions(labelled: &LabelledCloud) -> Vec<V3> {
 
 fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn scale(v: V3, s: f64) -> V3 {
+    [v[0] * s, v[1] * s, v[2] * s]
 }
 
 fn dist(a: V3, b: V3) -> f64 {
