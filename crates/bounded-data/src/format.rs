@@ -423,6 +423,20 @@ mod tests {
             let e = write(&path, &bad).unwrap_err().to_string();
             assert!(e.contains("'short' has 1 values for 3 points"), "{e}");
         }
+        for (name, expected) in [
+            ("y", "property name 'y' is used twice"),
+            ("red", "property name 'red' is used twice"),
+            (
+                "a b",
+                "property name 'a b' is empty or has a space or comma",
+            ),
+        ] {
+            let mut bad = t.clone();
+            bad.properties
+                .push(Property::new(name, Column::U8(vec![1, 2, 3])));
+            let e = write(&dir.path().join("out.xyz"), &bad).unwrap_err();
+            assert!(e.to_string().ends_with(expected), "{e}");
+        }
         assert_eq!(entries(dir.path()), Vec::<String>::new());
         // An existing file is left untouched by a failed overwrite.
         write(&path, &t).unwrap();

@@ -619,7 +619,7 @@ pub fn write_to<W: Write + Seek + Send + Sync + 'static>(
     compressed: bool,
     path: &Path,
 ) -> Result<W, DataError> {
-    view.check().map_err(|what| invalid(path, what))?;
+    view.check(path)?;
     let plan = Plan::new(view, compressed, path)?;
     let mut out = if compressed {
         write_laz(out, view, &plan, path)?

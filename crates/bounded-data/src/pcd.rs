@@ -8,7 +8,7 @@
 //! `red`/`green`/`blue` back into `rgb`, which PCL and CloudCompare display.
 
 use crate::DataError;
-use crate::records::{read_line, read_records, truncated};
+use crate::records::{read_line, read_records, read_text_rows, truncated};
 use crate::table::{Column, Endian, PointTable, Property, ScalarType, TableView};
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
@@ -180,7 +180,10 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
         .map(|&ty| Column::with_capacity(ty, n.min(4096)))
         .collect();
     match header.data {
-        Data::Ascii => read_ascii(&mut input, n, &mut columns, header.lines, path)?,
+        Data::Ascii => {
+            let mut line = header.lines;
+            read_text_rows(&mut input, n, &mut columns, &mut line, "points", path)?
+        }
         Data::Binary => read_records(
             &mut input,
             n,
@@ -199,41 +202,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
         .map(|(name, values)| Property::new(name, values))
         .collect();
     unpack_colours(&mut properties);
-    let (cloud, position_type, properties) =
-        crate::table::split_positions(properties).map_err(|e| e.into_data_error(path))?;
-    Ok(PointTable {
-        cloud,
-        position_type,
-        properties,
-    })
-}
-
-fn read_ascii(
-    input: &mut impl BufRead,
-    count: usize,
-    columns: &mut [Column],
-    mut line: usize,
-    path: &Path,
-) -> Result<(), DataError> {
-    let mut buf = Vec::new();
-    let mut done = 0;
-    while done < count {
-        line += 1;
-        if read_line(input, &mut buf, path)?.is_none() {
-            return Err(DataError::malformed(
-                path,
-                format!("the file ends at line {line} after {done} of {count} points"),
-            ));
-        }
-        let text = std::str::from_utf8(&buf)
-            .map_err(|_| DataError::malformed(path, format!("line {line}: not text")))?;
-        if text.trim().is_empty() {
-            continue;
-        }
-        crate::records::parse_row(text.split_ascii_whitespace(), columns, line, path)?;
-        done += 1;
-    }
-    Ok(())
+    crate::table::from_properties(properties, path)
 }
 
 fn read_compressed(
@@ -385,10 +354,7 @@ fn unpack_colours(properties: &mut Vec<Property>) {
 
 /// Writes `view` as a `DATA binary` PCD to `out`; `path` names the file in errors.
 pub fn write_to(out: impl Write, view: &TableView<'_>, path: &Path) -> Result<(), DataError> {
-    view.check().map_err(|what| DataError::InvalidOutput {
-        path: path.to_path_buf(),
-        what,
-    })?;
+    view.check(path)?;
     let packed = pack_colours(view);
     let mut view = view.clone();
     if let Some(rgb) = &packed {

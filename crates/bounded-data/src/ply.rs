@@ -146,30 +146,30 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
                     properties: Vec::new(),
                 });
             }
-            ["property", "list", count, item, name] => {
-                let (Some(count), Some(item)) = (scalar_type(count), scalar_type(item)) else {
-                    return Err(bad("unknown property type"));
+            ["property", rest @ ..] => {
+                let (name, kind) = match rest {
+                    ["list", count, item, name] => {
+                        let (Some(count), Some(item)) = (scalar_type(count), scalar_type(item))
+                        else {
+                            return Err(bad("unknown property type"));
+                        };
+                        if count.is_float() {
+                            return Err(bad("list count type must be an integer"));
+                        }
+                        (name, Kind::List { count, item })
+                    }
+                    [ty, name] => {
+                        let ty = scalar_type(ty).ok_or_else(|| bad("unknown property type"))?;
+                        (name, Kind::Scalar(ty))
+                    }
+                    _ => return Err(bad("unrecognised header line")),
                 };
-                if count.is_float() {
-                    return Err(bad("list count type must be an integer"));
-                }
-                let element = header
+                header
                     .elements
                     .last_mut()
-                    .ok_or_else(|| bad("property before any element"))?;
-                element
+                    .ok_or_else(|| bad("property before any element"))?
                     .properties
-                    .push((name.to_string(), Kind::List { count, item }));
-            }
-            ["property", ty, name] => {
-                let ty = scalar_type(ty).ok_or_else(|| bad("unknown property type"))?;
-                let element = header
-                    .elements
-                    .last_mut()
-                    .ok_or_else(|| bad("property before any element"))?;
-                element
-                    .properties
-                    .push((name.to_string(), Kind::Scalar(ty)));
+                    .push((name.to_string(), kind));
             }
             ["end_header"] => break,
             _ => return Err(bad("unrecognised header line")),
@@ -228,7 +228,14 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
             for element in &header.elements[..vertex_at] {
                 skip_ascii_items(&mut input, element, &mut line, &mut buf, path)?;
             }
-            read_ascii_vertices(&mut input, count, &mut columns, &mut line, path)?;
+            crate::records::read_text_rows(
+                &mut input,
+                count,
+                &mut columns,
+                &mut line,
+                "vertices",
+                path,
+            )?;
         }
         Some(endian) => {
             let mut offset = header.bytes;
@@ -252,13 +259,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
         .zip(columns)
         .map(|((name, _), values)| Property::new(name.clone(), values))
         .collect();
-    let (cloud, position_type, properties) =
-        crate::table::split_positions(properties).map_err(|e| e.into_data_error(path))?;
-    Ok(PointTable {
-        cloud,
-        position_type,
-        properties,
-    })
+    crate::table::from_properties(properties, path)
 }
 
 fn skip_ascii_items(
@@ -287,34 +288,6 @@ fn skip_ascii_items(
                 }
             })?;
         buf.clear();
-    }
-    Ok(())
-}
-
-fn read_ascii_vertices(
-    input: &mut impl BufRead,
-    count: usize,
-    columns: &mut [Column],
-    line: &mut usize,
-    path: &Path,
-) -> Result<(), DataError> {
-    let mut buf = Vec::new();
-    let mut done = 0;
-    while done < count {
-        *line += 1;
-        let Some(_) = crate::records::read_line(input, &mut buf, path)? else {
-            return Err(DataError::malformed(
-                path,
-                format!("the file ends at line {line} after {done} of {count} vertices"),
-            ));
-        };
-        let text = std::str::from_utf8(&buf)
-            .map_err(|_| DataError::malformed(path, format!("line {line}: not text")))?;
-        if text.trim().is_empty() {
-            continue;
-        }
-        crate::records::parse_row(text.split_ascii_whitespace(), columns, *line, path)?;
-        done += 1;
     }
     Ok(())
 }
@@ -391,10 +364,7 @@ pub fn write_to(
     encoding: Encoding,
     path: &Path,
 ) -> Result<(), DataError> {
-    view.check().map_err(|what| DataError::InvalidOutput {
-        path: path.to_path_buf(),
-        what,
-    })?;
+    view.check(path)?;
     let mut out = std::io::BufWriter::with_capacity(1 << 20, out);
     write_body(&mut out, view, encoding).map_err(|e| DataError::io(path, e))?;
     out.flush().map_err(|e| DataError::io(path, e))
@@ -548,6 +518,22 @@ mod tests {
                 "point 1 has a non-finite",
             ),
             (HEAD.replace("vertex 2", "vertex 0").into_bytes(), "empty"),
+            (
+                HEAD.replace("element vertex 2\n", "").into_bytes(),
+                "header line 3: property before any element",
+            ),
+            (
+                HEAD.replace("float y", "float32x y").into_bytes(),
+                "header line 5: unknown property type",
+            ),
+            (
+                HEAD.replace("float z", "list float int z").into_bytes(),
+                "header line 6: list count type must be an integer",
+            ),
+            (
+                HEAD.replace("float z", "list uchar z").into_bytes(),
+                "header line 6: unrecognised header line",
+            ),
             (
                 format!("{}\0\0\0\0", HEAD.replace("ascii", "binary_little_endian")).into_bytes(),
                 "ends within point 0 of 2 (block at byte offset 115)",

@@ -119,6 +119,37 @@ pub(crate) fn parse_row<'t>(
     Ok(())
 }
 
+/// Reads `count` non-blank text rows of whitespace-separated values into `columns`;
+/// `line` counts the lines read (for messages), `noun` names the rows ("points").
+pub(crate) fn read_text_rows(
+    input: &mut impl BufRead,
+    count: usize,
+    columns: &mut [Column],
+    line: &mut usize,
+    noun: &str,
+    path: &Path,
+) -> Result<(), DataError> {
+    let mut buf = Vec::new();
+    let mut done = 0;
+    while done < count {
+        *line += 1;
+        if read_line(input, &mut buf, path)?.is_none() {
+            return Err(DataError::malformed(
+                path,
+                format!("the file ends at line {line} after {done} of {count} {noun}"),
+            ));
+        }
+        let text = std::str::from_utf8(&buf)
+            .map_err(|_| DataError::malformed(path, format!("line {line}: not text")))?;
+        if text.trim().is_empty() {
+            continue;
+        }
+        parse_row(text.split_ascii_whitespace(), columns, *line, path)?;
+        done += 1;
+    }
+    Ok(())
+}
+
 /// A truncation (unexpected end of input) as a [`DataError::Malformed`] saying `what`,
 /// any other I/O error as [`DataError::Io`].
 pub(crate) fn truncated(path: &Path, what: String, e: std::io::Error) -> DataError {

@@ -456,13 +456,19 @@ impl TableView<'_> {
         self.cloud.is_empty()
     }
 
-    /// Checks that every property has one value per point and that names are unique and
-    /// not `x`, `y`, `z`.
-    pub(crate) fn check(&self) -> Result<(), String> {
+    /// Checks, before `path` is written, that every property has one value per point and
+    /// that names are unique and not `x`, `y`, `z`.
+    pub(crate) fn check(&self, path: &std::path::Path) -> Result<(), crate::DataError> {
+        let invalid = |what| {
+            Err(crate::DataError::InvalidOutput {
+                path: path.to_path_buf(),
+                what,
+            })
+        };
         let mut seen = std::collections::HashSet::new();
         for p in &self.properties {
             if p.values.len() != self.len() {
-                return Err(format!(
+                return invalid(format!(
                     "property '{}' has {} values for {} points",
                     p.name,
                     p.values.len(),
@@ -470,13 +476,13 @@ impl TableView<'_> {
                 ));
             }
             if p.name.is_empty() || p.name.contains(|c: char| c.is_whitespace() || c == ',') {
-                return Err(format!(
+                return invalid(format!(
                     "property name '{}' is empty or has a space or comma",
                     p.name
                 ));
             }
             if matches!(p.name.as_str(), "x" | "y" | "z") || !seen.insert(p.name.as_str()) {
-                return Err(format!("property name '{}' is used twice", p.name));
+                return invalid(format!("property name '{}' is used twice", p.name));
             }
         }
         Ok(())
@@ -488,17 +494,20 @@ impl TableView<'_> {
     }
 }
 
-/// Builds the cloud of a table from its `x`, `y`, `z` columns (any type) and returns the
-/// remaining properties; the error names what is missing or invalid.
-pub(crate) fn split_positions(
-    mut columns: Vec<Property>,
-) -> Result<(PointCloud, PositionType, Vec<Property>), PositionError> {
+/// Builds a table from a file's properties: the cloud from its `x`, `y`, `z` columns (any
+/// type), the rest kept; the error names `path` and what is missing or invalid.
+pub(crate) fn from_properties(
+    mut properties: Vec<Property>,
+    path: &std::path::Path,
+) -> Result<PointTable, crate::DataError> {
     let mut take = |name: &str| {
-        let at = columns
+        let at = properties
             .iter()
             .position(|p| p.name.eq_ignore_ascii_case(name))
-            .ok_or(PositionError::Missing)?;
-        Ok(columns.remove(at).values)
+            .ok_or_else(|| {
+                crate::DataError::malformed(path, "the points have no x, y and z properties")
+            })?;
+        Ok::<_, crate::DataError>(properties.remove(at).values)
     };
     let x = take("x")?;
     let y = take("y")?;
@@ -516,37 +525,20 @@ pub(crate) fn split_positions(
         }
         _ => PointCloud::from_iter_f64(x.len(), |i| [x.get_f64(i), y.get_f64(i), z.get_f64(i)]),
     }
-    .map_err(PositionError::Geom)?;
+    .map_err(|source| crate::DataError::Geom {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let position_type = if all_f32 {
         PositionType::F32
     } else {
         PositionType::F64
     };
-    Ok((cloud, position_type, columns))
-}
-
-/// Why [`split_positions`] failed.
-#[derive(Debug)]
-pub(crate) enum PositionError {
-    /// No `x`, `y` or `z` property.
-    Missing,
-    /// Empty cloud or non-finite coordinate.
-    Geom(bounded_geom::GeomError),
-}
-
-impl PositionError {
-    /// The matching [`DataError`](crate::DataError) for `path`.
-    pub(crate) fn into_data_error(self, path: &std::path::Path) -> crate::DataError {
-        match self {
-            PositionError::Missing => {
-                crate::DataError::malformed(path, "the points have no x, y and z properties")
-            }
-            PositionError::Geom(source) => crate::DataError::Geom {
-                path: path.to_path_buf(),
-                source,
-            },
-        }
-    }
+    Ok(PointTable {
+        cloud,
+        position_type,
+        properties,
+    })
 }
 
 #[cfg(test)]
@@ -587,14 +579,9 @@ mod tests {
             Property::new("y", Column::F32(vec![1.0, 2.0])),
             Property::new("z", Column::I32(vec![-3, 4])),
         ];
-        let (cloud, ty, rest) = split_positions(columns).unwrap();
-        assert_eq!(ty, PositionType::F64);
-        assert_eq!(cloud.position_f64(1), [5_403_151.5, 2.0, 4.0]);
-        let mut table = PointTable {
-            cloud,
-            position_type: ty,
-            properties: rest,
-        };
+        let mut table = from_properties(columns, std::path::Path::new("t.ply")).unwrap();
+        assert_eq!(table.position_type, PositionType::F64);
+        assert_eq!(table.cloud.position_f64(1), [5_403_151.5, 2.0, 4.0]);
         table.set_property(Property::new("intensity", Column::U8(vec![1, 2])));
         assert_eq!(table.properties.len(), 1);
         assert_eq!(table.property("intensity"), Some(&Column::U8(vec![1, 2])));

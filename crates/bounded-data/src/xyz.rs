@@ -105,13 +105,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
         .zip(columns)
         .map(|(name, values)| Property::new(name, values))
         .collect();
-    let (cloud, position_type, properties) =
-        crate::table::split_positions(properties).map_err(|e| e.into_data_error(path))?;
-    Ok(PointTable {
-        cloud,
-        position_type,
-        properties,
-    })
+    crate::table::from_properties(properties, path)
 }
 
 /// Column names from the header (or `x y z column_4 ...`), positions first when the header
@@ -163,10 +157,7 @@ pub fn write_to(
     separator: Separator,
     path: &Path,
 ) -> Result<(), DataError> {
-    view.check().map_err(|what| DataError::InvalidOutput {
-        path: path.to_path_buf(),
-        what,
-    })?;
+    view.check(path)?;
     let mut out = std::io::BufWriter::with_capacity(1 << 20, out);
     let s = separator.char();
     let names: Vec<&str> = ["x", "y", "z"]
