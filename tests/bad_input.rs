@@ -23,11 +23,22 @@ fn fails(input: &Path, output_name: &str) -> String {
     assert_eq!(lines.len(), 1, "{}: not one line: {err}", input.display());
     assert!(lines[0].starts_with("error: "), "{err}");
     assert!(
+        !repeats_a_cause(lines[0]),
+        "{}: cause repeated: {err}",
+        input.display()
+    );
+    assert!(
         !has_files(out_dir.path()),
         "{}: output left behind",
         input.display()
     );
     lines[0].to_string()
+}
+
+/// True when the line ends in "X: X" (a cause printed twice).
+fn repeats_a_cause(line: &str) -> bool {
+    line.match_indices(": ")
+        .any(|(at, _)| line[..at].ends_with(&line[at + 2..]))
 }
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
@@ -121,6 +132,13 @@ fn unknown_extension() {
 }
 
 #[test]
+fn missing_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let line = fails(&dir.path().join("missing.ply"), "out.ply");
+    assert!(line.contains("missing.ply"), "{line}");
+}
+
+#[test]
 fn unwritable_output_directory() {
     let dir = tempfile::tempdir().unwrap();
     let input = write(dir.path(), "good.ply", ascii_ply(&grid(500)).as_bytes());
@@ -129,5 +147,6 @@ fn unwritable_output_directory() {
     assert!(!run.status.success());
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(!repeats_a_cause(err.trim_end()), "{err}");
     assert!(err.contains("/nonexistent-dir"), "{err}");
 }

@@ -26,10 +26,39 @@ fn main() -> std::process::ExitCode {
     match commands::run(args.command) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(error) => {
-            // One line: the error and its causes, outermost first.
-            let causes: Vec<String> = error.chain().map(|c| c.to_string()).collect();
-            eprintln!("error: {}", causes.join(": "));
+            eprintln!("error: {}", one_line(&error));
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// The error and its causes on one line, outermost first; a cause whose text an outer
+/// message already quotes (the library errors name their source) is not repeated.
+fn one_line(error: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in error.chain().map(|c| c.to_string()) {
+        if line.contains(&cause) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&cause);
+    }
+    line
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+
+    #[test]
+    fn causes_are_joined_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let quoted = anyhow::Error::new(io).context("a.ply: no such file");
+        assert_eq!(one_line(&quoted), "a.ply: no such file");
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let plain = anyhow::Error::new(io).context("reading a.ply");
+        assert_eq!(one_line(&plain), "reading a.ply: no such file");
     }
 }
