@@ -150,3 +150,29 @@ fn unwritable_output_directory() {
     assert!(!repeats_a_cause(err.trim_end()), "{err}");
     assert!(err.contains("/nonexistent-dir"), "{err}");
 }
+
+#[test]
+fn unlabelled_clouds_for_eval_and_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "plain.xyz", b"0 0 0\n1 0 0\n0 1 0\n");
+    let out = tempfile::tempdir().unwrap();
+    let picture = out.path().join("plain.png");
+    for (args, expected) in [
+        (
+            vec![
+                &"eval" as &dyn AsRef<std::ffi::OsStr>,
+                &"--data",
+                &dir.path(),
+            ],
+            "no labels",
+        ),
+        (vec![&"render", &input, &"-o", &picture], "--by detect"),
+    ] {
+        let run = bounded_paths(&args);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("plain.xyz") && err.contains(expected), "{err}");
+    }
+    assert!(!has_files(out.path()));
+}

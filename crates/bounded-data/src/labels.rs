@@ -37,6 +37,17 @@ impl Convention {
     };
 }
 
+impl std::fmt::Display for Convention {
+    /// How the labels are stored, as error messages name it.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Convention::Pcednet { .. } => "PCEDNet label colours",
+            Convention::Bazazian => "Bazazian label colours",
+            Convention::ClassProperty => "a class property",
+        })
+    }
+}
+
 /// Reads `path` (any supported format) and derives its labels by `convention`.
 pub fn load(path: &Path, convention: Convention) -> Result<LabelledCloud, DataError> {
     let table = crate::format::read(path)?;
@@ -65,7 +76,7 @@ pub fn from_table(
     }
     .map_err(|what| DataError::Labels {
         path: path.to_path_buf(),
-        what: format!("{what} ({convention:?} convention)"),
+        what: format!("{what} (expected {convention})"),
     })?;
     Ok(LabelledCloud {
         cloud: table.cloud,
@@ -155,7 +166,10 @@ mod tests {
         );
         let msg = e.unwrap_err().to_string();
         assert!(
-            msg.contains("b.ply") && msg.contains("point 1") && msg.contains("[1.0, 2.0, 3.0]"),
+            msg.contains("b.ply")
+                && msg.contains("point 1")
+                && msg.contains("[1.0, 2.0, 3.0]")
+                && msg.ends_with("(expected Bazazian label colours)"),
             "{msg}"
         );
     }

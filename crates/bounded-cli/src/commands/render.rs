@@ -30,6 +30,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let table = format::read(&args.input)?;
     let classes = match args.by {
         ColourBy::Class => {
+            if table.property("class").is_none() && table.property("label").is_none() {
+                bail!(
+                    "{}: no 'class' property to colour by; --by detect runs detection first, \
+                     --by truth reads PCEDNet or Bazazian label colours",
+                    args.input.display()
+                );
+            }
             labels::from_table(table.clone(), Convention::ClassProperty, &args.input)?.labels
         }
         ColourBy::Truth => sources::labelled(&args.input, Class::NonEdge)?.labels,

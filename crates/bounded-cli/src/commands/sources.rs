@@ -49,6 +49,13 @@ pub fn labelled(path: &Path, smooth_edge: Class) -> Result<LabelledCloud> {
     if table.property("class").is_some() || table.property("label").is_some() {
         return Ok(labels::from_table(table, Convention::ClassProperty, path)?);
     }
+    if table.property("red").is_none() {
+        bail!(
+            "{}: no labels: neither a 'class' or 'label' property nor label colours \
+             (red, green, blue as in the PCEDNet or Bazazian clouds)",
+            path.display()
+        );
+    }
     let pcednet = Convention::Pcednet { smooth_edge };
     match labels::from_table(table.clone(), pcednet, path) {
         Ok(labelled) => Ok(labelled),
