@@ -98,7 +98,9 @@ pub fn generated_config(spec: &str) -> Result<SetConfig> {
         .with_context(|| format!("{spec:?}: bad seed"))?;
     let shapes = shapes
         .parse()
-        .with_context(|| format!("{spec:?}: bad shape count"))?;
+        .ok()
+        .filter(|&n: &usize| n > 0)
+        .with_context(|| format!("{spec:?}: the shape count must be a whole number above 0"))?;
     Ok(SetConfig::new(set_kind(kind)?, seed, shapes))
 }
 
@@ -112,4 +114,35 @@ pub fn training_clouds(source: &str) -> Result<Vec<(String, LabelledCloud)>> {
         .into_iter()
         .map(|path| Ok((stem(&path), labelled(&path, Class::NonEdge)?)))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generated_specs_parse_or_say_what_is_wrong() {
+        let config = generated_config("generated:boundary:7").unwrap();
+        assert_eq!(
+            (config.kind, config.seed, config.shapes),
+            (SetKind::Boundary, 7, 60)
+        );
+        assert_eq!(generated_config("generated:cad:1:5").unwrap().shapes, 5);
+        for (spec, expected) in [
+            ("generated:cad", "expected generated:KIND:SEED[:SHAPES]"),
+            ("generated:cube:1", "unknown set kind \"cube\""),
+            ("generated:cad:x", "bad seed"),
+            (
+                "generated:cad:1:0",
+                "shape count must be a whole number above 0",
+            ),
+            (
+                "generated:cad:1:-3",
+                "shape count must be a whole number above 0",
+            ),
+        ] {
+            let e = generated_config(spec).unwrap_err().to_string();
+            assert!(e.contains(expected), "{spec}: {e}");
+        }
+    }
 }
