@@ -108,11 +108,13 @@ fn by_colour(
         .collect()
 }
 
+/// The column [`Convention::ClassProperty`] reads: `class`, else `label`.
+pub fn class_column(table: &PointTable) -> Option<&Column> {
+    table.property("class").or_else(|| table.property("label"))
+}
+
 fn by_class(table: &PointTable) -> Result<Vec<Class>, String> {
-    let column: &Column = table
-        .property("class")
-        .or_else(|| table.property("label"))
-        .ok_or("no 'class' or 'label' property")?;
+    let column = class_column(table).ok_or("no 'class' or 'label' property")?;
     (0..table.len())
         .map(|i| {
             let v = column.get_f64(i);

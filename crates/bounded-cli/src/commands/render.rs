@@ -30,7 +30,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let table = format::read(&args.input)?;
     let classes = match args.by {
         ColourBy::Class => {
-            if table.property("class").is_none() && table.property("label").is_none() {
+            if labels::class_column(&table).is_none() {
                 bail!(
                     "{}: no 'class' property to colour by; --by detect runs detection first, \
                      --by truth reads PCEDNet or Bazazian label colours",

@@ -46,7 +46,7 @@ pub fn dataset_files(dir: &Path, roles: &[Role]) -> Result<Vec<PathBuf>> {
 /// Bazazian colours when a colour outside PCEDNet's palette appears.
 pub fn labelled(path: &Path, smooth_edge: Class) -> Result<LabelledCloud> {
     let table = format::read(path)?;
-    if table.property("class").is_some() || table.property("label").is_some() {
+    if labels::class_column(&table).is_some() {
         return Ok(labels::from_table(table, Convention::ClassProperty, path)?);
     }
     if table.property("red").is_none() {
