@@ -106,24 +106,28 @@ fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::err
         along.push(a.abs() / spacing);
         across.push((dot(d, d) - a * a).max(0.0).sqrt() / spacing);
     }
+    // The crease nearest to each noisy point, found once for both oracles.
+    let creases: Vec<Crease> = (0..c.len())
+        .map(|i| nearest_crease(&clean, &c, &neighbours[i * K..(i + 1) * K], p[i]))
+        .collect();
     let oracle = |normal: &dyn Fn(usize) -> Option<V3>| {
         let offsets: Vec<f64> = (0..c.len())
-            .map(|i| {
-                let rows = &neighbours[i * K..(i + 1) * K];
-                crease_distance(&clean, &c, rows, p[i], normal(i)) / spacing
-            })
+            .map(|i| creases[i].offset(&c, p[i], normal(i)) / spacing)
             .collect();
-        THRESHOLDS
-            .iter()
-            .map(|&threshold| Oracle {
-                mcc: mcc(&offsets, &clean.labels, threshold),
-                threshold,
-            })
-            .fold(None, |a: Option<Oracle>, b| match a {
-                Some(a) if a.mcc >= b.mcc => Some(a),
-                _ => Some(b),
-            })
-            .expect("thresholds are not empty")
+        THRESHOLDS.iter().fold(
+            Oracle {
+                mcc: f64::NEG_INFINITY,
+                threshold: 0.0,
+            },
+            |best, &threshold| {
+                let mcc = mcc(&offsets, &clean.labels, threshold);
+                if mcc > best.mcc {
+                    Oracle { mcc, threshold }
+                } else {
+                    best
+                }
+            },
+        )
     };
     Ok(Study {
         points: c.len(),
@@ -134,16 +138,18 @@ fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::err
     })
 }
 
-/// Distance from `q` to the line through the two clean sharp points nearest to it among
-/// `neighbours` (to the one point when there is one, infinite when there is none),
-/// measured across `normal` when one is given (its part along `normal` dropped first).
-fn crease_distance(
-    clean: &LabelledCloud,
-    c: &[V3],
-    neighbours: &[u32],
-    q: V3,
-    normal: Option<V3>,
-) -> f64 {
+/// The exact crease near a noisy point, as clean point indices.
+enum Crease {
+    /// No clean sharp point among the neighbours.
+    None,
+    /// One clean sharp point.
+    Point(usize),
+    /// The line through the two nearest clean sharp points.
+    Line(usize, usize),
+}
+
+/// The crease through the clean sharp points of `neighbours` nearest to `q`.
+fn nearest_crease(clean: &LabelledCloud, c: &[V3], neighbours: &[u32], q: V3) -> Crease {
     let mut sharp: Vec<(f64, usize)> = neighbours
         .iter()
         .map(|&j| j as usize)
@@ -151,21 +157,33 @@ fn crease_distance(
         .map(|j| (dist(q, c[j]), j))
         .collect();
     sharp.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let across = |v: V3| match normal {
-        Some(n) => sub(v, scale(n, dot(v, n))),
-        None => v,
-    };
     match sharp[..] {
-        [] => f64::INFINITY,
-        [(_, a)] => {
-            let aq = across(sub(q, c[a]));
-            dot(aq, aq).sqrt()
-        }
-        [(_, a), (_, b), ..] => {
-            let ab = sub(c[b], c[a]);
-            let aq = across(sub(q, c[a]));
-            let normal = cross(ab, aq);
-            dot(normal, normal).sqrt() / dot(ab, ab).sqrt()
+        [] => Crease::None,
+        [(_, a)] => Crease::Point(a),
+        [(_, a), (_, b), ..] => Crease::Line(a, b),
+    }
+}
+
+impl Crease {
+    /// Distance from `q` (infinite without a crease), measured across `normal` when one is
+    /// given (its part along `normal` dropped first).
+    fn offset(&self, c: &[V3], q: V3, normal: Option<V3>) -> f64 {
+        let across = |v: V3| match normal {
+            Some(n) => sub(v, scale(n, dot(v, n))),
+            None => v,
+        };
+        match *self {
+            Crease::None => f64::INFINITY,
+            Crease::Point(a) => {
+                let aq = across(sub(q, c[a]));
+                dot(aq, aq).sqrt()
+            }
+            Crease::Line(a, b) => {
+                let ab = sub(c[b], c[a]);
+                let aq = across(sub(q, c[a]));
+                let normal = cross(ab, aq);
+                dot(normal, normal).sqrt() / dot(ab, ab).sqrt()
+            }
         }
     }
 }
