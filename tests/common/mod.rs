@@ -2,7 +2,7 @@
 #![allow(dead_code)] // each test file uses a different subset
 
 use bounded_data::LabelledCloud;
-use bounded_data::synth::{Sampling, ShapeKind, ShapeSpec, generate_shape};
+use bounded_data::synth::{NoiseDirection, Sampling, ShapeKind, ShapeSpec, generate_shape};
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -34,6 +34,7 @@ pub fn box_cloud(points: usize, seed: u64) -> LabelledCloud {
         sampling: Sampling::Random,
         points,
         noise: 0.0,
+        noise_direction: NoiseDirection::Isotropic,
         outlier_fraction: 0.0,
         seed,
     })

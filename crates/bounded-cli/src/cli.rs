@@ -153,6 +153,22 @@ pub struct GenerateArgs {
     /// Number of shapes.
     #[arg(long)]
     pub shapes: Option<usize>,
+    /// Noise levels, each shape drawing one: standard deviations as multiples of the cloud's
+    /// median point spacing (default 0,0.1,0.2,0.4,0.6).
+    #[arg(long, value_delimiter = ',')]
+    pub noise: Option<Vec<f64>>,
+    /// Which way the noise moves points.
+    #[arg(long, value_enum, default_value_t = NoiseAlong::Any)]
+    pub noise_along: NoiseAlong,
+}
+
+/// Which way generated noise moves points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum NoiseAlong {
+    /// Every coordinate independently (sampling jitter).
+    Any,
+    /// The surface normal only (range noise of scanners, as in the noisy ABC sample).
+    Normal,
 }
 
 /// Arguments of `render`.

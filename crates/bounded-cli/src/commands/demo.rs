@@ -8,7 +8,7 @@ use crate::render::View;
 use anyhow::{Context, Result};
 use bounded_data::LabelledCloud;
 use bounded_data::format;
-use bounded_data::synth::{Sampling, ShapeKind, ShapeSpec, generate_shape};
+use bounded_data::synth::{NoiseDirection, Sampling, ShapeKind, ShapeSpec, generate_shape};
 use bounded_data::table::{Column, PointTable, Property};
 use bounded_geom::{Class, PointCloud};
 use bounded_nn::ConfusionMatrix;
@@ -33,6 +33,7 @@ pub fn scene(seed: u64) -> Result<LabelledCloud> {
             sampling: Sampling::Random,
             points: 16_000,
             noise: 0.1,
+            noise_direction: NoiseDirection::Isotropic,
             outlier_fraction: 0.0,
             seed: seed.wrapping_mul(31).wrapping_add(i as u64),
         };

@@ -1,18 +1,28 @@
 //! `bounded generate`: write a synthetic labelled set as binary PLY files.
 
 use super::sources;
-use crate::cli::GenerateArgs;
+use crate::cli::{GenerateArgs, NoiseAlong};
 use crate::progress;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use bounded_data::format;
-use bounded_data::synth::{SetConfig, generate_one};
+use bounded_data::synth::{NoiseDirection, SetConfig, generate_one};
 use rayon::prelude::*;
 use std::time::Instant;
 
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let start = Instant::now();
     let kind = sources::set_kind(&args.kind)?;
-    let config = SetConfig::new(kind, args.seed, args.shapes.unwrap_or(60));
+    let mut config = SetConfig::new(kind, args.seed, args.shapes.unwrap_or(60));
+    if let Some(levels) = &args.noise {
+        if let Some(bad) = levels.iter().find(|l| !(l.is_finite() && **l >= 0.0)) {
+            bail!("--noise {bad}: noise levels are multiples of the point spacing, 0 or more");
+        }
+        config.noise_levels.clone_from(levels);
+    }
+    config.noise_direction = match args.noise_along {
+        NoiseAlong::Any => NoiseDirection::Isotropic,
+        NoiseAlong::Normal => NoiseDirection::Normal,
+    };
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
     let bar = progress::bar("generate", config.shapes as u64, "clouds");

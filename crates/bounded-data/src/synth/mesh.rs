@@ -308,7 +308,7 @@ impl Mesh {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A unit cube built from six separate faces, so welding must join them.

@@ -1,0 +1,79 @@
+//! `bounded generate`: noise levels and direction from the command line; bad levels refused.
+
+mod common;
+
+use bounded_data::LabelledCloud;
+use bounded_data::labels::{Convention, load};
+use common::{bounded_paths, stderr};
+use std::path::Path;
+
+/// Generates 2 CAD shapes of seed 3 into `dir` with `options`; returns them by file name.
+fn generate(dir: &Path, options: &[&str]) -> Vec<(String, LabelledCloud)> {
+    let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![
+        &"generate",
+        &"--kind",
+        &"cad",
+        &"--shapes",
+        &"2",
+        &"--seed",
+        &"3",
+        &"-o",
+        &dir,
+    ];
+    args.extend(options.iter().map(|o| o as &dyn AsRef<std::ffi::OsStr>));
+    let run = bounded_paths(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .map(|f| {
+            let name = f.file_name().unwrap().to_string_lossy().into_owned();
+            (name, load(f, Convention::ClassProperty).unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn noise_levels_and_direction_move_the_same_points() {
+    let root = tempfile::tempdir().unwrap();
+    let clean = generate(&root.path().join("clean"), &["--noise", "0"]);
+    let normal = generate(
+        &root.path().join("normal"),
+        &["--noise", "0.5", "--noise-along", "normal"],
+    );
+    let any = generate(&root.path().join("any"), &["--noise", "0.5"]);
+    assert_eq!(clean.len(), 2);
+    for ((c, n), a) in clean.iter().zip(&normal).zip(&any) {
+        assert_eq!(c.0, n.0);
+        assert_eq!(c.1.labels, n.1.labels, "{}: labels are the clean ones", c.0);
+        assert_eq!(c.1.labels, a.1.labels);
+        let moved = |other: &LabelledCloud| {
+            (0..c.1.cloud.len())
+                .filter(|&i| c.1.cloud.position_f64(i) != other.cloud.position_f64(i))
+                .count()
+        };
+        assert!(moved(&n.1) > c.1.cloud.len() * 9 / 10, "{}", c.0);
+        assert!(moved(&a.1) > c.1.cloud.len() * 9 / 10, "{}", c.0);
+        assert_ne!(n.1.cloud, a.1.cloud, "{}: the direction matters", c.0);
+    }
+}
+
+#[test]
+fn negative_or_non_finite_noise_is_refused_before_any_file() {
+    for level in ["-1", "nan", "inf"] {
+        let root = tempfile::tempdir().unwrap();
+        let out = root.path().join("set");
+        let run = bounded_paths(&[&"generate", &"-o", &out, &format!("--noise={level}")]);
+        let err = stderr(&run);
+        assert!(!run.status.success(), "{level}: accepted");
+        assert!(
+            err.contains("--noise") && !err.contains("panicked"),
+            "{err}"
+        );
+        assert!(!out.exists(), "{level}: {} created", out.display());
+    }
+}
