@@ -43,10 +43,9 @@ pub(crate) fn add_noise(points: &mut [V3], sigma: f64, rng: &mut impl Rng) {
 }
 
 /// Which way noise displaces points.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NoiseDirection {
     /// Every coordinate independently (sampling jitter).
-    #[default]
     Isotropic,
     /// Along the surface normal only, as range noise displaces scanned points and as the
     /// noisy ABC evaluation clouds were made; on a crease or corner, along the mean of its
@@ -67,11 +66,12 @@ pub(crate) fn add_normal_noise(mesh: &Mesh, points: &mut [V3], sigma: f64, rng: 
 }
 
 /// The unit normal of `mesh` at each of `points`: the normal of the triangle a point lies
-/// on, or on an edge or vertex shared by several, the mean of their faces' normals, each oriented
-/// away from the other triangles' corners (outward on a convex crease, away from both faces
-/// on a concave one), so that the result does not depend on the triangles' winding.
-/// A point on no triangle (off the mesh by more than a 1e-7 of its diagonal) gets the
-/// normal of none, zero: it is not moved.
+/// on, or on an edge or vertex shared by several, the mean of their faces' normals, each
+/// oriented away from the other triangles' corners (outward on a convex crease, away from
+/// both faces on a concave one), so that the result does not depend on the triangles'
+/// winding. A point on no triangle (off the mesh by more than 1e-7 of its diagonal) gets a
+/// zero normal: it is not moved. Every point is tested against every triangle: the
+/// generator's meshes have a few thousand at most.
 fn surface_normals(mesh: &Mesh, points: &[V3]) -> Vec<V3> {
     let eps = 1e-7 * mesh.diagonal();
     let triangles: Vec<([V3; 3], V3)> = mesh
