@@ -396,6 +396,30 @@ mod tests {
     }
 
     #[test]
+    fn normal_noise_moves_every_point_of_every_shape() {
+        // A point found on no triangle would get no normal and silently stay clean.
+        for (i, kind) in ShapeKind::ALL.into_iter().enumerate() {
+            for sampling in [Sampling::MeshVertex, Sampling::Random] {
+                let spec = ShapeSpec {
+                    kind,
+                    sampling,
+                    points: 3000,
+                    noise: 0.3,
+                    noise_direction: NoiseDirection::Normal,
+                    outlier_fraction: 0.0,
+                    seed: i as u64,
+                };
+                let noisy = generate_shape(&spec).unwrap();
+                let clean = generate_shape(&ShapeSpec { noise: 0.0, ..spec }).unwrap();
+                let still = (0..clean.cloud.len())
+                    .filter(|&j| clean.cloud.position_f64(j) == noisy.cloud.position_f64(j))
+                    .count();
+                assert_eq!(still, 0, "{kind:?} {sampling:?}: {still} points not moved");
+            }
+        }
+    }
+
+    #[test]
     fn noise_matches_the_requested_level() {
         // A flat disc: the noise is the only off-plane displacement. Its orientation is
         // random, so measure the spread along the fitted normal: the smallest
