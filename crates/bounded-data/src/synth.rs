@@ -359,63 +359,81 @@ mod tests {
         assert!(a.iter().zip(&c).all(|(x, y)| x.1 != y.1));
     }
 
-    #[test]
-    fn every_shape_in_both_modes_gives_finite_labelled_points() {
-        for (i, kind) in ShapeKind::ALL.into_iter().enumerate() {
-            for sampling in [Sampling::MeshVertex, Sampling::Random] {
-                let spec = ShapeSpec {
+    /// Every shape kind in both sampling modes (seed: the kind's index), from `template`.
+    fn every_shape(template: ShapeSpec) -> impl Iterator<Item = ShapeSpec> {
+        ShapeKind::ALL
+            .into_iter()
+            .enumerate()
+            .flat_map(move |(i, kind)| {
+                let template = template.clone();
+                [Sampling::MeshVertex, Sampling::Random].map(move |sampling| ShapeSpec {
                     kind,
                     sampling,
-                    points: 4000,
-                    noise: 0.2,
-                    noise_direction: NoiseDirection::Isotropic,
-                    outlier_fraction: 0.01,
                     seed: i as u64,
-                };
-                let c = generate_shape(&spec).unwrap();
-                let n = c.cloud.len();
-                // A thin plate's two sides lie closer than the minimum distance, so
-                // mesh-vertex mode fills them about as densely as one sheet.
-                let low = if kind == ShapeKind::ThinPlate {
-                    1600
-                } else {
-                    2700
-                };
-                assert!(n > low && n < 5300, "{kind:?} {sampling:?}: {n}");
-                assert_eq!(c.labels.len(), n);
-                let counts = c.class_counts();
-                assert_eq!(
-                    counts[Class::Boundary as usize] > 0,
-                    kind.is_open(),
-                    "{kind:?} {counts:?}"
-                );
-                // Edge points are a minority everywhere.
-                assert!(counts[0] > n / 2, "{kind:?} {sampling:?} {counts:?}");
-            }
+                    ..template.clone()
+                })
+            })
+    }
+
+    #[test]
+    fn every_shape_in_both_modes_gives_finite_labelled_points() {
+        let template = ShapeSpec {
+            kind: ShapeKind::Box,
+            sampling: Sampling::Random,
+            points: 4000,
+            noise: 0.2,
+            noise_direction: NoiseDirection::Isotropic,
+            outlier_fraction: 0.01,
+            seed: 0,
+        };
+        for spec in every_shape(template) {
+            let (kind, sampling) = (spec.kind, spec.sampling);
+            let c = generate_shape(&spec).unwrap();
+            let n = c.cloud.len();
+            // A thin plate's two sides lie closer than the minimum distance, so
+            // mesh-vertex mode fills them about as densely as one sheet.
+            let low = if kind == ShapeKind::ThinPlate {
+                1600
+            } else {
+                2700
+            };
+            assert!(n > low && n < 5300, "{kind:?} {sampling:?}: {n}");
+            assert_eq!(c.labels.len(), n);
+            let counts = c.class_counts();
+            assert_eq!(
+                counts[Class::Boundary as usize] > 0,
+                kind.is_open(),
+                "{kind:?} {counts:?}"
+            );
+            // Edge points are a minority everywhere.
+            assert!(counts[0] > n / 2, "{kind:?} {sampling:?} {counts:?}");
         }
     }
 
     #[test]
     fn normal_noise_moves_every_point_of_every_shape() {
         // A point found on no triangle would get no normal and silently stay clean.
-        for (i, kind) in ShapeKind::ALL.into_iter().enumerate() {
-            for sampling in [Sampling::MeshVertex, Sampling::Random] {
-                let spec = ShapeSpec {
-                    kind,
-                    sampling,
-                    points: 3000,
-                    noise: 0.3,
-                    noise_direction: NoiseDirection::Normal,
-                    outlier_fraction: 0.0,
-                    seed: i as u64,
-                };
-                let noisy = generate_shape(&spec).unwrap();
-                let clean = generate_shape(&ShapeSpec { noise: 0.0, ..spec }).unwrap();
-                let still = (0..clean.cloud.len())
-                    .filter(|&j| clean.cloud.position_f64(j) == noisy.cloud.position_f64(j))
-                    .count();
-                assert_eq!(still, 0, "{kind:?} {sampling:?}: {still} points not moved");
-            }
+        let template = ShapeSpec {
+            kind: ShapeKind::Box,
+            sampling: Sampling::Random,
+            points: 3000,
+            noise: 0.3,
+            noise_direction: NoiseDirection::Normal,
+            outlier_fraction: 0.0,
+            seed: 0,
+        };
+        for spec in every_shape(template) {
+            let noisy = generate_shape(&spec).unwrap();
+            let clean = generate_shape(&ShapeSpec {
+                noise: 0.0,
+                ..spec.clone()
+            })
+            .unwrap();
+            let still = (0..clean.cloud.len())
+                .filter(|&j| clean.cloud.position_f64(j) == noisy.cloud.position_f64(j))
+                .count();
+            let (kind, sampling) = (spec.kind, spec.sampling);
+            assert_eq!(still, 0, "{kind:?} {sampling:?}: {still} points not moved");
         }
     }
 
