@@ -7,7 +7,8 @@
 //! anisotropic stretch of up to 1.25 per axis before their features are extracted, then are
 //! sampled in one of two [`Sampling`] modes (see there for the label rules), and perturbed by
 //! Gaussian noise (a multiple of the median nearest-neighbour spacing, in every coordinate or
-//! along the surface normal only; labels stay those of the clean points) and a few outliers (non-edge).
+//! along the surface normal only; labels stay those of the clean points) and a few outliers
+//! (non-edge).
 //!
 //! Generation is deterministic: shape `i` of a set draws from its own ChaCha8 stream of the
 //! set's seed, so the same configuration gives the same clouds bit for bit, in parallel or
@@ -127,8 +128,9 @@ pub struct SetConfig {
     pub shapes: usize,
     /// Points per cloud, drawn uniformly per shape (mesh-vertex mode reaches it within ~20%).
     pub points: RangeInclusive<usize>,
-    /// Noise levels, each shape picking one uniformly: the standard deviation per coordinate
-    /// as a multiple of the cloud's median nearest-neighbour spacing.
+    /// Noise levels, each shape picking one uniformly: the standard deviation (per coordinate,
+    /// or along the normal; see `noise_direction`) as a multiple of the cloud's median
+    /// nearest-neighbour spacing.
     pub noise_levels: Vec<f64>,
     /// Which way the noise displaces points.
     pub noise_direction: NoiseDirection,
