@@ -44,6 +44,13 @@ pub enum DataError {
         /// What is wrong, naming the point and value.
         what: String,
     },
+    /// A generator setting is out of range (noise level or outlier fraction negative,
+    /// non-finite, or a fraction above 1).
+    #[error("generator: {what}")]
+    Generator {
+        /// Which setting and value, and the range it must lie in.
+        what: String,
+    },
     /// A write request is inconsistent (e.g. fewer classes than points).
     #[error("{path}: cannot write: {what}")]
     InvalidOutput {

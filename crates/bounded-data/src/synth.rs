@@ -155,6 +155,13 @@ impl SetConfig {
         }
     }
 
+    /// Checks the noise levels and the outlier fraction; [`generate`] does, so a caller
+    /// writing files can check before creating any.
+    pub fn validate(&self) -> Result<(), DataError> {
+        self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
+        check_outlier_fraction(self.outlier_fraction)
+    }
+
     /// The parameters of shape `index`, drawn from the set's seed.
     pub fn spec(&self, index: usize) -> ShapeSpec {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
@@ -229,6 +236,7 @@ pub struct ShapeSpec {
 
 /// Generates a whole set in parallel, in index order.
 pub fn generate(config: &SetConfig) -> Result<Vec<(String, LabelledCloud)>, DataError> {
+    config.validate()?;
     (0..config.shapes)
         .into_par_iter()
         .map(|i| generate_one(config, i))
@@ -254,8 +262,11 @@ pub fn generate_one(
 
 /// Generates one labelled cloud.
 ///
-/// Fails only when `spec.points` is 0 (an empty cloud).
+/// Fails when `spec.points` is 0 (an empty cloud) or its noise or outlier fraction is out of
+/// range (see [`SetConfig::validate`]).
 pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
+    check_noise(spec.noise)?;
+    check_outlier_fraction(spec.outlier_fraction)?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut mesh = spec.kind.build(&mut rng);
     let pose = Pose::random(&mut rng);
@@ -286,6 +297,26 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     Ok(LabelledCloud {
         cloud,
         labels: sampled.labels,
+    })
+}
+
+/// A noise level must be finite and 0 or more (a multiple of the spacing).
+fn check_noise(level: f64) -> Result<(), DataError> {
+    if level.is_finite() && level >= 0.0 {
+        return Ok(());
+    }
+    Err(DataError::Generator {
+        what: format!("noise level {level}: a multiple of the point spacing, 0 or more"),
+    })
+}
+
+/// An outlier fraction must lie in 0..=1.
+fn check_outlier_fraction(fraction: f64) -> Result<(), DataError> {
+    if (0.0..=1.0).contains(&fraction) {
+        return Ok(());
+    }
+    Err(DataError::Generator {
+        what: format!("outlier fraction {fraction}: a fraction of the points, 0 to 1"),
     })
 }
 
@@ -480,5 +511,40 @@ mod tests {
                 sd / spacing
             );
         }
+    }
+
+    #[test]
+    fn out_of_range_noise_or_outliers_are_refused() {
+        let spec = ShapeSpec {
+            kind: ShapeKind::Box,
+            sampling: Sampling::Random,
+            points: 500,
+            noise: 0.0,
+            noise_direction: NoiseDirection::Normal,
+            outlier_fraction: 0.0,
+            seed: 1,
+        };
+        assert!(generate_shape(&spec).is_ok());
+        for noise in [-0.1, f64::NAN, f64::INFINITY] {
+            let err = generate_shape(&ShapeSpec {
+                noise,
+                ..spec.clone()
+            })
+            .unwrap_err();
+            assert!(matches!(err, DataError::Generator { .. }), "{noise}: {err}");
+            assert!(err.to_string().contains("noise level"), "{err}");
+        }
+        for outlier_fraction in [-0.01, 1.5, f64::NAN] {
+            let err = generate_shape(&ShapeSpec {
+                outlier_fraction,
+                ..spec.clone()
+            })
+            .unwrap_err();
+            assert!(err.to_string().contains("outlier fraction"), "{err}");
+        }
+        let mut set = small(SetKind::Cad, 1, 2);
+        assert!(set.validate().is_ok());
+        set.noise_levels = vec![0.2, -1.0];
+        assert!(matches!(generate(&set), Err(DataError::Generator { .. })));
     }
 }

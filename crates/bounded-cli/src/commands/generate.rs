@@ -3,7 +3,7 @@
 use super::sources;
 use crate::cli::{GenerateArgs, NoiseAlong};
 use crate::progress;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use bounded_data::format;
 use bounded_data::synth::{NoiseDirection, SetConfig, generate_one};
 use rayon::prelude::*;
@@ -14,15 +14,13 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
     let kind = sources::set_kind(&args.kind)?;
     let mut config = SetConfig::new(kind, args.seed, args.shapes.unwrap_or(60));
     if let Some(levels) = &args.noise {
-        if let Some(bad) = levels.iter().find(|l| !(l.is_finite() && **l >= 0.0)) {
-            bail!("--noise {bad}: noise levels are multiples of the point spacing, 0 or more");
-        }
         config.noise_levels.clone_from(levels);
     }
     config.noise_direction = match args.noise_along {
         NoiseAlong::Any => NoiseDirection::Isotropic,
         NoiseAlong::Normal => NoiseDirection::Normal,
     };
+    config.validate().context("--noise")?;
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
     let bar = progress::bar("generate", config.shapes as u64, "clouds");
