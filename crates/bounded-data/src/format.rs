@@ -157,6 +157,7 @@ pub fn write_labelled(path: &Path, labelled: &LabelledCloud) -> Result<(), DataE
         cloud: &labelled.cloud,
         position_type: PositionType::for_cloud(&labelled.cloud),
         properties: vec![&class],
+        exact_positions: None,
     };
     write_view(path, &view)
 }
@@ -381,6 +382,129 @@ mod tests {
             }
         }
         assert_eq!(entries(dir.path()).len(), 7, "no temporary files left");
+    }
+
+    /// Every position as the writers see it.
+    fn positions(t: &PointTable) -> Vec<[f64; 3]> {
+        let view = t.view();
+        (0..t.len()).map(|i| view.position(i)).collect()
+    }
+
+    /// A LAS file of `xyz` on the grid of `scale` (offset 0), written by the las crate.
+    fn las_file(path: &Path, xyz: &[[f64; 3]], scale: f64) {
+        let mut builder = las::Builder::from((1, 4));
+        let t = las::Transform { scale, offset: 0.0 };
+        builder.transforms = las::Vector { x: t, y: t, z: t };
+        let header = builder.into_header().unwrap();
+        let mut writer = las::Writer::from_path(path, header).unwrap();
+        for &[x, y, z] in xyz {
+            writer
+                .write_point(las::Point {
+                    x,
+                    y,
+                    z,
+                    ..Default::default()
+                })
+                .unwrap();
+        }
+        writer.close().unwrap();
+    }
+
+    #[test]
+    fn outputs_keep_every_input_position_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        let classes = [Class::NonEdge; 3];
+        let probabilities = [[1.0, 0.0, 0.0]; 3];
+        // Float PLY far from its bounding-box centre: offsets from the centre would round
+        // 0.001 and 4.675.
+        let floats: [[f32; 3]; 3] = [
+            [0.001, 4.675, -1234.5677],
+            [100.0, 0.3, 7.1],
+            [1e-6, 9.9, 0.0],
+        ];
+        let mut ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n\
+            property float x\nproperty float y\nproperty float z\nend_header\n"
+            .to_vec();
+        ply.extend(floats.iter().flatten().flat_map(|v| v.to_le_bytes()));
+        std::fs::write(dir.path().join("floats.ply"), ply).unwrap();
+        // Text with UTM-sized doubles.
+        let doubles = [
+            [500_000.01, 4_000_000.123, 100.5],
+            [500_900.37, 4_000_800.001, 99.25],
+            [500_450.0, 4_000_000.0, 0.1],
+        ];
+        let text: String = doubles
+            .iter()
+            .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
+            .collect();
+        std::fs::write(dir.path().join("doubles.xyz"), text).unwrap();
+        // LAS on a grid finer than f32 offsets resolve over 200 units.
+        let fine = [
+            [0.1234567, 200.0, 3.0],
+            [199.9999999, 0.0000001, 1.5],
+            [50.0, 60.0, 70.0],
+        ];
+        las_file(&dir.path().join("fine.las"), &fine, 1e-7);
+        let inputs: [(&str, Vec<[f64; 3]>); 3] = [
+            (
+                "floats.ply",
+                floats.iter().map(|p| p.map(f64::from)).collect(),
+            ),
+            ("doubles.xyz", doubles.to_vec()),
+            ("fine.las", fine.to_vec()),
+        ];
+        for (name, expected) in inputs {
+            let input = read(&dir.path().join(name)).unwrap();
+            // Within a rounding of the decimal literals, then bit for bit from here on.
+            let read_back = positions(&input);
+            for (p, q) in read_back.iter().zip(&expected) {
+                assert!(
+                    (0..3).all(|a| (p[a] - q[a]).abs() < 1e-9),
+                    "{name}: {p:?} {q:?}"
+                );
+            }
+            for ext in ["ply", "pcd", "xyz", "las"] {
+                if ext == "las" && !name.ends_with("las") {
+                    continue; // LAS output quantises other inputs onto its own grid.
+                }
+                let path = dir.path().join(format!("{name}.out.{ext}"));
+                write_annotated(&path, &input, &classes, &probabilities).unwrap();
+                let mut back = positions(&read(&path).unwrap());
+                if ext == "xyz" && name.ends_with("ply") {
+                    // Text prints the shortest decimal of each float; it reads back as f64.
+                    back.iter_mut()
+                        .for_each(|p| *p = p.map(|c| f64::from(c as f32)));
+                }
+                assert_eq!(back, read_back, "{name} -> {ext}");
+            }
+        }
+    }
+
+    #[test]
+    fn exact_positions_are_kept_only_when_offsets_lose_digits() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("small.xyz"), "0.5 1.25 2\n-3 4 5.75\n").unwrap();
+        std::fs::write(dir.path().join("utm.xyz"), "500000.01 1 2\n500900.37 4 5\n").unwrap();
+        las_file(
+            &dir.path().join("coarse.las"),
+            &[[1.25, 2.0, 3.0], [500.5, 0.0, 0.01]],
+            0.01,
+        );
+        let kept = |name: &str| {
+            read(&dir.path().join(name))
+                .unwrap()
+                .exact_positions
+                .is_some()
+        };
+        assert!(!kept("small.xyz"));
+        assert!(kept("utm.xyz"));
+        assert!(!kept("coarse.las"));
+        assert!(
+            read(&dir.path().join("coarse.las"))
+                .unwrap()
+                .exact_positions
+                .is_none()
+        );
     }
 
     #[test]

@@ -464,7 +464,7 @@ fn into_table(
     decoded: Decoded,
     path: &Path,
 ) -> Result<PointTable, DataError> {
-    let cloud = cloud_of(decoded.xyz, t).map_err(|source| DataError::Geom {
+    let (cloud, exact_positions) = cloud_of(decoded.xyz, t).map_err(|source| DataError::Geom {
         path: path.to_path_buf(),
         source,
     })?;
@@ -485,6 +485,7 @@ fn into_table(
             offset: [t.x.offset, t.y.offset, t.z.offset],
         },
         properties,
+        exact_positions,
     })
 }
 
@@ -493,11 +494,14 @@ fn into_table(
 /// scaled coordinates, without its two passes over them and its second allocation: the
 /// bounding box comes from the integer extremes (scaling is monotonic) and the integers turn
 /// into offsets from its centre in place (`[i32; 3]` and `[f32; 3]` have the same layout, so
-/// the collect reuses the allocation).
+/// the collect reuses the allocation). Also the exact coordinates, when some integer does
+/// not come back from its `f32` offset on the same scale and offset (a scale finer than
+/// `f32` resolves over the cloud's extent); see `PointTable::exact_positions`.
+type ExactCloud = (bounded_geom::PointCloud, Option<Vec<[f64; 3]>>);
 fn cloud_of(
     xyz: Vec<[i32; 3]>,
     t: &Vector<Transform>,
-) -> Result<bounded_geom::PointCloud, bounded_geom::GeomError> {
+) -> Result<ExactCloud, bounded_geom::GeomError> {
     let axes = [t.x, t.y, t.z];
     let absolute = move |p: [i32; 3]| std::array::from_fn::<f64, 3, _>(|a| axes[a].direct(p[a]));
     let (lo, hi) = xyz.par_iter().map(|&p| (p, p)).reduce(
@@ -513,16 +517,25 @@ fn cloud_of(
     let origin: [f64; 3] = std::array::from_fn(|a| 0.5 * (lo[a].min(hi[a]) + lo[a].max(hi[a])));
     if xyz.is_empty() || !origin.iter().all(|o| o.is_finite()) {
         // Let the general constructor name the empty cloud or the first non-finite point.
-        return bounded_geom::PointCloud::from_iter_f64(xyz.len(), |i| absolute(xyz[i]));
+        let cloud = bounded_geom::PointCloud::from_iter_f64(xyz.len(), |i| absolute(xyz[i]))?;
+        return Ok((cloud, None));
     }
-    let points = xyz
-        .into_iter()
-        .map(|p| {
-            let p = absolute(p);
-            std::array::from_fn(|a| (p[a] - origin[a]) as f32)
+    let local = move |p: [i32; 3]| {
+        let p = absolute(p);
+        std::array::from_fn::<f32, 3, _>(|a| (p[a] - origin[a]) as f32)
+    };
+    // What the writer makes of the offset on the same scale and offset.
+    let returns = |p: [i32; 3]| {
+        let q = local(p);
+        (0..3).all(|a| {
+            let steps = (origin[a] + f64::from(q[a]) - axes[a].offset) / axes[a].scale;
+            steps.round() == f64::from(p[a])
         })
-        .collect();
-    bounded_geom::PointCloud::from_local(origin, points)
+    };
+    let exact = (!xyz.par_iter().all(|&p| returns(p)))
+        .then(|| xyz.par_iter().map(|&p| absolute(p)).collect());
+    let points = xyz.into_iter().map(local).collect();
+    Ok((bounded_geom::PointCloud::from_local(origin, points)?, exact))
 }
 
 /// Size of one Extra Bytes descriptor.
@@ -1061,7 +1074,8 @@ fn transforms(view: &TableView<'_>) -> Vector<Transform> {
 
 /// Writes the scaled integer coordinates of points `first..` into `records` and returns
 /// their smallest and largest value per axis. The divisions run over runs of one axis (they
-/// vectorise); the values match `((origin + x - offset) / scale).round()` exactly.
+/// vectorise); the values match `((x - offset) / scale).round()` exactly, for `x` the exact
+/// input position if the table keeps it, else `origin + offset from it`.
 fn encode_positions(
     view: &TableView<'_>,
     first: usize,
@@ -1081,10 +1095,22 @@ fn encode_positions(
         .zip(records.chunks_mut(RUN * stride))
         .enumerate()
     {
+        let exact = view
+            .exact_positions
+            .map(|e| &e[first + run * RUN..first + run * RUN + points.len()]);
         for a in 0..3 {
             let (o, Transform { scale, offset }) = (origin[a], axes[a]);
-            for (s, p) in steps.iter_mut().zip(points) {
-                *s = (o + f64::from(p[a]) - offset) / scale;
+            match exact {
+                Some(exact) => {
+                    for (s, p) in steps.iter_mut().zip(exact) {
+                        *s = (p[a] - offset) / scale;
+                    }
+                }
+                None => {
+                    for (s, p) in steps.iter_mut().zip(points) {
+                        *s = (o + f64::from(p[a]) - offset) / scale;
+                    }
+                }
             }
             for (k, (record, &x)) in records.chunks_exact_mut(stride).zip(&steps).enumerate() {
                 let v = round_i32(x).ok_or_else(|| {
@@ -1515,7 +1541,7 @@ mod tests {
                 z: axis,
             };
             let general = PointCloud::from_iter_f64(3, |i| xyz[i].map(|v| axis.direct(v)));
-            assert_eq!(cloud_of(xyz.clone(), &t).unwrap(), general.unwrap());
+            assert_eq!(cloud_of(xyz.clone(), &t).unwrap().0, general.unwrap());
         }
     }
 

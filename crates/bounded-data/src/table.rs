@@ -374,6 +374,10 @@ pub struct PointTable {
     pub position_type: PositionType,
     /// The other properties, in file order, each with one value per point.
     pub properties: Vec<Property>,
+    /// The positions exactly as read, kept only when the cloud's `f32` offsets do not give
+    /// them back (`f64` coordinates, or LAS integers finer than `f32` resolves): the
+    /// writers use them, so an output never moves a point. `None` for new clouds.
+    pub exact_positions: Option<Vec<[f64; 3]>>,
 }
 
 impl PointTable {
@@ -384,6 +388,7 @@ impl PointTable {
             position_type: PositionType::for_cloud(&cloud),
             cloud,
             properties: Vec::new(),
+            exact_positions: None,
         }
     }
 
@@ -427,6 +432,7 @@ impl PointTable {
             cloud: &self.cloud,
             position_type: self.position_type,
             properties: self.properties.iter().collect(),
+            exact_positions: self.exact_positions.as_deref(),
         }
     }
 }
@@ -443,6 +449,8 @@ pub struct TableView<'a> {
     pub position_type: PositionType,
     /// The properties, each with one value per point, names unique.
     pub properties: Vec<&'a Property>,
+    /// The input's exact positions, if the table keeps them (see [`PointTable`]).
+    pub exact_positions: Option<&'a [[f64; 3]]>,
 }
 
 impl TableView<'_> {
@@ -488,9 +496,19 @@ impl TableView<'_> {
         Ok(())
     }
 
-    /// Absolute position of point `i`.
+    /// Absolute position of point `i`: the exact input position if kept, else the cloud's,
+    /// on the LAS grid for scaled coordinates (so `x = scale * n + offset` prints as read).
     pub(crate) fn position(&self, i: usize) -> [f64; 3] {
-        self.cloud.position_f64(i)
+        if let Some(exact) = self.exact_positions {
+            return exact[i];
+        }
+        let p = self.cloud.position_f64(i);
+        match self.position_type {
+            PositionType::Scaled { scale, offset } => std::array::from_fn(|a| {
+                scale[a] * ((p[a] - offset[a]) / scale[a]).round() + offset[a]
+            }),
+            _ => p,
+        }
     }
 }
 
@@ -512,33 +530,45 @@ pub(crate) fn from_properties(
     let x = take("x")?;
     let y = take("y")?;
     let z = take("z")?;
-    let all_f32 = [&x, &y, &z]
-        .iter()
-        .all(|c| c.scalar_type() == ScalarType::F32);
-    // Typed fast paths for the common cases: no per-value dispatch in the hot loop.
-    let cloud = match (&x, &y, &z) {
-        (Column::F32(x), Column::F32(y), Column::F32(z)) => {
-            PointCloud::from_iter_f64(x.len(), |i| [x[i], y[i], z[i]].map(f64::from))
-        }
-        (Column::F64(x), Column::F64(y), Column::F64(z)) => {
-            PointCloud::from_iter_f64(x.len(), |i| [x[i], y[i], z[i]])
-        }
-        _ => PointCloud::from_iter_f64(x.len(), |i| [x.get_f64(i), y.get_f64(i), z.get_f64(i)]),
-    }
-    .map_err(|source| crate::DataError::Geom {
+    let geom = |source| crate::DataError::Geom {
         path: path.to_path_buf(),
         source,
-    })?;
-    let position_type = if all_f32 {
-        PositionType::F32
-    } else {
-        PositionType::F64
     };
+    // `f32` coordinates are kept as they are (origin 0), so they come back bit for bit;
+    // features use differences between neighbours in `f64`, which need no centring.
+    if let (Column::F32(x), Column::F32(y), Column::F32(z)) = (&x, &y, &z) {
+        let points = (x.iter().zip(y).zip(z))
+            .map(|((&x, &y), &z)| [x, y, z])
+            .collect();
+        return Ok(PointTable {
+            cloud: PointCloud::from_local([0.0; 3], points).map_err(geom)?,
+            position_type: PositionType::F32,
+            properties,
+            exact_positions: None,
+        });
+    }
+    let position = |i| [x.get_f64(i), y.get_f64(i), z.get_f64(i)];
+    let cloud = PointCloud::from_iter_f64(x.len(), position).map_err(geom)?;
+    let exact_positions = exact_if_lossy(&cloud, position);
     Ok(PointTable {
         cloud,
-        position_type,
+        position_type: PositionType::F64,
         properties,
+        exact_positions,
     })
+}
+
+/// Every `position(i)` when the cloud does not give some of them back exactly, else `None`:
+/// the copy costs memory only where the cloud's `f32` offsets lose digits.
+fn exact_if_lossy(
+    cloud: &PointCloud,
+    position: impl Fn(usize) -> [f64; 3] + Sync,
+) -> Option<Vec<[f64; 3]>> {
+    use rayon::prelude::*;
+    let lossless = (0..cloud.len())
+        .into_par_iter()
+        .all(|i| cloud.position_f64(i) == position(i));
+    (!lossless).then(|| (0..cloud.len()).into_par_iter().map(&position).collect())
 }
 
 #[cfg(test)]

@@ -2,9 +2,12 @@ use crate::GeomError;
 
 /// A point cloud of positions only.
 ///
-/// Points are stored re-centred on `origin` (the centre of the bounding box) in
-/// `f32`: 12 bytes per point, and full precision for any real-world coordinates.
-#[derive(Debug, Clone, PartialEq)]
+/// Points are stored as `f32` offsets from an `f64` origin: 12 bytes per point. The
+/// constructors from `f64` positions take the centre of the bounding box, which keeps
+/// about a 16-millionth of the cloud's extent for any real-world coordinates; a reader
+/// of `f32` coordinates takes the origin 0 and keeps them exactly. Two clouds are equal
+/// when every point has the same absolute position, whatever their origins.
+#[derive(Debug, Clone)]
 pub struct PointCloud {
     origin: [f64; 3],
     points: Vec<[f32; 3]>,
@@ -97,6 +100,13 @@ impl PointCloud {
     }
 }
 
+impl PartialEq for PointCloud {
+    fn eq(&self, other: &Self) -> bool {
+        self.len() == other.len()
+            && (0..self.len()).all(|i| self.position_f64(i) == other.position_f64(i))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -115,5 +125,17 @@ mod tests {
         assert_eq!(PointCloud::from_f64(&[]), Err(GeomError::Empty));
         let e = PointCloud::from_f64(&[[0.0; 3], [f64::NAN, 0.0, 0.0]]).unwrap_err();
         assert!(matches!(e, GeomError::NonFinite { index: 1, .. }));
+    }
+
+    #[test]
+    fn equal_means_the_same_absolute_positions() {
+        let centred = PointCloud::from_f64(&[[0.5, 1.0, 2.0], [1.5, 3.0, 4.0]]).unwrap();
+        let at_zero = PointCloud::from_local([0.0; 3], vec![[0.5, 1.0, 2.0], [1.5, 3.0, 4.0]]);
+        assert_ne!(centred.origin(), at_zero.as_ref().unwrap().origin());
+        assert_eq!(Ok(centred.clone()), at_zero);
+        let moved = PointCloud::from_local([0.0; 3], vec![[0.5, 1.0, 2.0], [1.5, 3.0, 4.5]]);
+        assert_ne!(Ok(centred.clone()), moved);
+        let shorter = PointCloud::from_local([0.0; 3], vec![[0.5, 1.0, 2.0]]);
+        assert_ne!(Ok(centred), shorter);
     }
 }
