@@ -489,6 +489,9 @@ fn into_table(
     })
 }
 
+/// A cloud and, where it cannot give them back, the exact positions it was made from.
+type ExactCloud = (bounded_geom::PointCloud, Option<Vec<[f64; 3]>>);
+
 /// The cloud of the scaled integer coordinates `xyz`, exactly as
 /// [`PointCloud::from_iter_f64`](bounded_geom::PointCloud::from_iter_f64) builds it from the
 /// scaled coordinates, without its two passes over them and its second allocation: the
@@ -497,7 +500,6 @@ fn into_table(
 /// the collect reuses the allocation). Also the exact coordinates, when some integer does
 /// not come back from its `f32` offset on the same scale and offset (a scale finer than
 /// `f32` resolves over the cloud's extent); see `PointTable::exact_positions`.
-type ExactCloud = (bounded_geom::PointCloud, Option<Vec<[f64; 3]>>);
 fn cloud_of(
     xyz: Vec<[i32; 3]>,
     t: &Vector<Transform>,
