@@ -28,6 +28,11 @@ fn detect_in_every_format_keeps_points_and_properties_and_finds_creases() {
 
         let back = format::read(&output).unwrap();
         assert_eq!(back.len(), n, "{ext}: point count");
+        let read_in = format::read(&input).unwrap();
+        assert!(
+            positions(&back) == positions(&read_in),
+            "{ext}: points moved"
+        );
         let intensity_back = back.property("intensity").expect("intensity kept");
         assert_eq!(intensity_back.get_f64(17), 17.0, "{ext}: intensity value");
         for name in ["p_nonedge", "p_sharp", "p_boundary"] {
@@ -57,25 +62,43 @@ fn detect_in_every_format_keeps_points_and_properties_and_finds_creases() {
 
 #[test]
 fn detect_writes_positions_back_at_full_precision() {
-    // UTM-like coordinates: the output must keep them, not the re-centred f32 values.
+    // UTM-like coordinates: the output must keep them bit for bit, not the f32 offsets.
     let labelled = box_cloud(3000, 5);
     let shifted: Vec<[f64; 3]> = (0..labelled.cloud.len())
         .map(|i| {
             let p = labelled.cloud.position_f64(i);
-            [p[0] + 512_000.25, p[1] + 5_403_150.5, p[2] + 300.0]
+            [
+                // Sub-millimetre digits no f32 offset holds.
+                p[0] + 512_000.123_456_7 + i as f64 * 1.1e-7,
+                p[1] + 5_403_150.987_654_3,
+                p[2] + 300.0,
+            ]
         })
         .collect();
-    let cloud = bounded_geom::PointCloud::from_f64(&shifted).unwrap();
+    // An ASCII PLY of the doubles themselves, which the cloud's f32 offsets cannot give back.
+    let header = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty double x\nproperty double y\n\
+         property double z\nend_header\n",
+        shifted.len()
+    );
+    let rows: String = shifted
+        .iter()
+        .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
+        .collect();
     let dir = tempfile::tempdir().unwrap();
     let (input, output) = (dir.path().join("utm.ply"), dir.path().join("out.ply"));
-    format::write(&input, &PointTable::new(cloud)).unwrap();
+    std::fs::write(&input, header + &rows).unwrap();
     let run = bounded_paths(&[&"detect", &input, &"-o", &output]);
     assert!(run.status.success(), "{}", stderr(&run));
-    let back = format::read(&output).unwrap();
-    let p = back.cloud.position_f64(10);
-    assert!(
-        (p[1] - shifted[10][1]).abs() < 1e-6,
-        "{p:?} vs {:?}",
-        shifted[10]
-    );
+    assert_eq!(positions(&format::read(&output).unwrap()), shifted);
+}
+
+/// The positions of a table as read: the exact ones if it keeps them, else the cloud's.
+fn positions(table: &PointTable) -> Vec<[f64; 3]> {
+    match &table.exact_positions {
+        Some(exact) => exact.clone(),
+        None => (0..table.len())
+            .map(|i| table.cloud.position_f64(i))
+            .collect(),
+    }
 }
