@@ -499,12 +499,12 @@ mod tests {
         assert!(!kept("small.xyz"));
         assert!(kept("utm.xyz"));
         assert!(!kept("coarse.las"));
-        assert!(
-            read(&dir.path().join("coarse.las"))
-                .unwrap()
-                .exact_positions
-                .is_none()
+        las_file(
+            &dir.path().join("fine.las"),
+            &[[0.1234567, 200.0, 3.0], [199.9999999, 0.0, 1.5]],
+            1e-7,
         );
+        assert!(kept("fine.las"));
     }
 
     #[test]
