@@ -37,7 +37,9 @@
 
 use crate::DataError;
 use crate::records::{BLOCK, block_len, pipelined, truncated};
-use crate::table::{Column, Endian, PointTable, PositionType, Property, ScalarType, TableView};
+use crate::table::{
+    Column, Endian, ExactCloud, PointTable, PositionType, Property, ScalarType, TableView,
+};
 use las::point::Format as LasFormat;
 use las::raw::header::LargeFile;
 use las::{Builder, Header, PointDataBuilder, Reader, Transform, Vector, Version, Vlr, Writer};
@@ -489,9 +491,6 @@ fn into_table(
     })
 }
 
-/// A cloud and, where it cannot give them back, the exact positions it was made from.
-type ExactCloud = (bounded_geom::PointCloud, Option<Vec<[f64; 3]>>);
-
 /// The cloud of the scaled integer coordinates `xyz`, exactly as
 /// [`PointCloud::from_iter_f64`](bounded_geom::PointCloud::from_iter_f64) builds it from the
 /// scaled coordinates, without its two passes over them and its second allocation: the
@@ -499,7 +498,8 @@ type ExactCloud = (bounded_geom::PointCloud, Option<Vec<[f64; 3]>>);
 /// into offsets from its centre in place (`[i32; 3]` and `[f32; 3]` have the same layout, so
 /// the collect reuses the allocation). Also the exact coordinates, when some integer does
 /// not come back from its `f32` offset on the same scale and offset (a scale finer than
-/// `f32` resolves over the cloud's extent); see `PointTable::exact_positions`.
+/// `f32` resolves over the cloud's extent; see `PointTable::exact_positions`): a parallel
+/// pass before the in-place one checks that, as the integers are gone after it.
 fn cloud_of(
     xyz: Vec<[i32; 3]>,
     t: &Vector<Transform>,

@@ -547,9 +547,14 @@ pub(crate) fn from_properties(
             exact_positions: None,
         });
     }
-    let position = |i| [x.get_f64(i), y.get_f64(i), z.get_f64(i)];
-    let cloud = PointCloud::from_iter_f64(x.len(), position).map_err(geom)?;
-    let exact_positions = exact_if_lossy(&cloud, position);
+    // A typed fast path for doubles: no per-value dispatch in the hot loops.
+    let (cloud, exact_positions) = match (&x, &y, &z) {
+        (Column::F64(x), Column::F64(y), Column::F64(z)) => {
+            exact_cloud(x.len(), |i| [x[i], y[i], z[i]])
+        }
+        _ => exact_cloud(x.len(), |i| [x.get_f64(i), y.get_f64(i), z.get_f64(i)]),
+    }
+    .map_err(geom)?;
     Ok(PointTable {
         cloud,
         position_type: PositionType::F64,
@@ -558,17 +563,23 @@ pub(crate) fn from_properties(
     })
 }
 
-/// Every `position(i)` when the cloud does not give some of them back exactly, else `None`:
-/// the copy costs memory only where the cloud's `f32` offsets lose digits.
-fn exact_if_lossy(
-    cloud: &PointCloud,
+/// A cloud and, where it cannot give them back, the exact positions it was made from.
+pub(crate) type ExactCloud = (PointCloud, Option<Vec<[f64; 3]>>);
+
+/// The cloud of the `len` positions `position(i)`, and all of them again when the cloud
+/// does not give some back exactly: the copy costs memory only where the cloud's `f32`
+/// offsets lose digits.
+fn exact_cloud(
+    len: usize,
     position: impl Fn(usize) -> [f64; 3] + Sync,
-) -> Option<Vec<[f64; 3]>> {
+) -> Result<ExactCloud, bounded_geom::GeomError> {
     use rayon::prelude::*;
-    let lossless = (0..cloud.len())
+    let cloud = PointCloud::from_iter_f64(len, &position)?;
+    let lossless = (0..len)
         .into_par_iter()
         .all(|i| cloud.position_f64(i) == position(i));
-    (!lossless).then(|| (0..cloud.len()).into_par_iter().map(&position).collect())
+    let exact = (!lossless).then(|| (0..len).into_par_iter().map(&position).collect());
+    Ok((cloud, exact))
 }
 
 #[cfg(test)]
