@@ -96,7 +96,7 @@ fn detect_writes_positions_back_at_full_precision() {
 /// The positions of a table as read: the exact ones if it keeps them, else the cloud's.
 fn positions(table: &PointTable) -> Vec<[f64; 3]> {
     match &table.exact_positions {
-        Some(exact) => exact.clone(),
+        Some(exact) => (0..exact.len()).map(|i| exact.get(i)).collect(),
         None => (0..table.len())
             .map(|i| table.cloud.position_f64(i))
             .collect(),

@@ -274,6 +274,7 @@ fn exchange(_: &Path, _: &Path) -> bool {
 mod tests {
     use super::*;
     use crate::labels::{Convention, load};
+    use crate::table::ExactPositions;
     use bounded_geom::PointCloud;
 
     fn sample() -> PointTable {
@@ -490,21 +491,33 @@ mod tests {
             &[[1.25, 2.0, 3.0], [500.5, 0.0, 0.01]],
             0.01,
         );
-        let kept = |name: &str| {
-            read(&dir.path().join(name))
-                .unwrap()
-                .exact_positions
-                .is_some()
-        };
-        assert!(!kept("small.xyz"));
-        assert!(kept("utm.xyz"));
-        assert!(!kept("coarse.las"));
+        let exact = |name: &str| read(&dir.path().join(name)).unwrap().exact_positions;
+        assert_eq!(exact("small.xyz"), None);
+        assert_eq!(
+            exact("utm.xyz"),
+            Some(ExactPositions::Float(vec![
+                [500000.01, 1.0, 2.0],
+                [500900.37, 4.0, 5.0]
+            ]))
+        );
+        assert_eq!(exact("coarse.las"), None);
         las_file(
             &dir.path().join("fine.las"),
             &[[0.1234567, 200.0, 3.0], [199.9999999, 0.0, 1.5]],
             1e-7,
         );
-        assert!(kept("fine.las"));
+        // LAS keeps its integers (12 bytes a point), not the doubles they stand for.
+        assert_eq!(
+            exact("fine.las"),
+            Some(ExactPositions::Scaled {
+                scale: [1e-7; 3],
+                offset: [0.0; 3],
+                steps: vec![
+                    [1_234_567, 2_000_000_000, 30_000_000],
+                    [1_999_999_999, 0, 15_000_000]
+                ],
+            })
+        );
     }
 
     #[test]

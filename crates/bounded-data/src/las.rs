@@ -38,7 +38,8 @@
 use crate::DataError;
 use crate::records::{BLOCK, block_len, pipelined, truncated};
 use crate::table::{
-    Column, Endian, ExactCloud, PointTable, PositionType, Property, ScalarType, TableView,
+    Column, Endian, ExactCloud, ExactPositions, PointTable, PositionType, Property, ScalarType,
+    TableView,
 };
 use las::point::Format as LasFormat;
 use las::raw::header::LargeFile;
@@ -496,7 +497,7 @@ fn into_table(
 /// scaled coordinates, without its two passes over them and its second allocation: the
 /// bounding box comes from the integer extremes (scaling is monotonic) and the integers turn
 /// into offsets from its centre in place (`[i32; 3]` and `[f32; 3]` have the same layout, so
-/// the collect reuses the allocation). Also the exact coordinates, when some integer does
+/// the collect reuses the allocation). Also a copy of the integers, when some integer does
 /// not come back from its `f32` offset on the same scale and offset (a scale finer than
 /// `f32` resolves over the cloud's extent; see `PointTable::exact_positions`): a parallel
 /// pass before the in-place one checks that, as the integers are gone after it.
@@ -534,8 +535,11 @@ fn cloud_of(
             steps.round() == f64::from(p[a])
         })
     };
-    let exact = (!xyz.par_iter().all(|&p| returns(p)))
-        .then(|| xyz.par_iter().map(|&p| absolute(p)).collect());
+    let exact = (!xyz.par_iter().all(|&p| returns(p))).then(|| ExactPositions::Scaled {
+        scale: axes.map(|t| t.scale),
+        offset: axes.map(|t| t.offset),
+        steps: xyz.clone(),
+    });
     let points = xyz.into_iter().map(local).collect();
     Ok((bounded_geom::PointCloud::from_local(origin, points)?, exact))
 }
@@ -1091,21 +1095,20 @@ fn encode_positions(
     let n = records.len() / stride;
     let points = &view.cloud.points()[first..first + n];
     let (mut min, mut max) = ([i32::MAX; 3], [i32::MIN; 3]);
-    let mut steps = [0f64; RUN];
+    let (mut steps, mut exact) = ([0f64; RUN], [0f64; RUN]);
     for (run, (points, records)) in points
         .chunks(RUN)
         .zip(records.chunks_mut(RUN * stride))
         .enumerate()
     {
-        let exact = view
-            .exact_positions
-            .map(|e| &e[first + run * RUN..first + run * RUN + points.len()]);
         for a in 0..3 {
             let (o, Transform { scale, offset }) = (origin[a], axes[a]);
-            match exact {
-                Some(exact) => {
-                    for (s, p) in steps.iter_mut().zip(exact) {
-                        *s = (p[a] - offset) / scale;
+            match view.exact_positions {
+                Some(positions) => {
+                    let exact = &mut exact[..points.len()];
+                    positions.axis(a, first + run * RUN, exact);
+                    for (s, x) in steps.iter_mut().zip(&*exact) {
+                        *s = (x - offset) / scale;
                     }
                 }
                 None => {

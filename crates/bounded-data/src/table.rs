@@ -377,7 +377,74 @@ pub struct PointTable {
     /// The positions exactly as read, kept only when the cloud's `f32` offsets do not give
     /// them back (`f64` coordinates, or LAS integers finer than `f32` resolves): the
     /// writers use them, so an output never moves a point. `None` for new clouds.
-    pub exact_positions: Option<Vec<[f64; 3]>>,
+    pub exact_positions: Option<ExactPositions>,
+}
+
+/// Input positions kept beside the cloud, in the input's own form: LAS integers take half
+/// the memory of the doubles they stand for.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ExactPositions {
+    /// Coordinates as read.
+    Float(Vec<[f64; 3]>),
+    /// LAS scaled integers `steps`: the position is `scale * step + offset` per axis.
+    Scaled {
+        /// Size of one step per axis.
+        scale: [f64; 3],
+        /// Position of step 0 per axis.
+        offset: [f64; 3],
+        /// The integers as read.
+        steps: Vec<[i32; 3]>,
+    },
+}
+
+impl ExactPositions {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Float(p) => p.len(),
+            Self::Scaled { steps, .. } => steps.len(),
+        }
+    }
+
+    /// True when there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Absolute position of point `i` (panics when out of range, like indexing).
+    pub fn get(&self, i: usize) -> [f64; 3] {
+        match self {
+            Self::Float(p) => p[i],
+            Self::Scaled {
+                scale,
+                offset,
+                steps,
+            } => std::array::from_fn(|a| scale[a] * f64::from(steps[i][a]) + offset[a]),
+        }
+    }
+
+    /// Writes coordinate `axis` of the points `first..first + out.len()` into `out`: one
+    /// branch per run instead of one per value, so the loops vectorise.
+    pub(crate) fn axis(&self, axis: usize, first: usize, out: &mut [f64]) {
+        let range = first..first + out.len();
+        match self {
+            Self::Float(p) => {
+                for (o, p) in out.iter_mut().zip(&p[range]) {
+                    *o = p[axis];
+                }
+            }
+            Self::Scaled {
+                scale,
+                offset,
+                steps,
+            } => {
+                let (scale, offset) = (scale[axis], offset[axis]);
+                for (o, n) in out.iter_mut().zip(&steps[range]) {
+                    *o = scale * f64::from(n[axis]) + offset;
+                }
+            }
+        }
+    }
 }
 
 impl PointTable {
@@ -432,7 +499,7 @@ impl PointTable {
             cloud: &self.cloud,
             position_type: self.position_type,
             properties: self.properties.iter().collect(),
-            exact_positions: self.exact_positions.as_deref(),
+            exact_positions: self.exact_positions.as_ref(),
         }
     }
 }
@@ -450,7 +517,7 @@ pub struct TableView<'a> {
     /// The properties, each with one value per point, names unique.
     pub properties: Vec<&'a Property>,
     /// The input's exact positions, if the table keeps them (see [`PointTable`]).
-    pub exact_positions: Option<&'a [[f64; 3]]>,
+    pub exact_positions: Option<&'a ExactPositions>,
 }
 
 impl TableView<'_> {
@@ -500,7 +567,7 @@ impl TableView<'_> {
     /// on the LAS grid for scaled coordinates (so `x = scale * n + offset` prints as read).
     pub(crate) fn position(&self, i: usize) -> [f64; 3] {
         if let Some(exact) = self.exact_positions {
-            return exact[i];
+            return exact.get(i);
         }
         let p = self.cloud.position_f64(i);
         match self.position_type {
@@ -564,7 +631,7 @@ pub(crate) fn from_properties(
 }
 
 /// A cloud and, where it cannot give them back, the exact positions it was made from.
-pub(crate) type ExactCloud = (PointCloud, Option<Vec<[f64; 3]>>);
+pub(crate) type ExactCloud = (PointCloud, Option<ExactPositions>);
 
 /// The cloud of the `len` positions `position(i)`, and all of them again when the cloud
 /// does not give some back exactly: the copy costs memory only where the cloud's `f32`
@@ -578,7 +645,8 @@ fn exact_cloud(
     let lossless = (0..len)
         .into_par_iter()
         .all(|i| cloud.position_f64(i) == position(i));
-    let exact = (!lossless).then(|| (0..len).into_par_iter().map(&position).collect());
+    let exact = (!lossless)
+        .then(|| ExactPositions::Float((0..len).into_par_iter().map(&position).collect()));
     Ok((cloud, exact))
 }
 
