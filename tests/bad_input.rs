@@ -104,11 +104,22 @@ fn nan_coordinate() {
         .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
         .collect();
     text += "1 nan 2\n";
-    let line = fails(&write(dir.path(), "nan.xyz", text.as_bytes()), "out.xyz");
+    let input = write(dir.path(), "nan.xyz", text.as_bytes());
+    let line = fails(&input, "out.xyz");
     assert!(
-        line.contains("nan.xyz") && line.to_lowercase().contains("finite"),
+        line.contains("nan.xyz") && line.contains("point 500 has a non-finite coordinate"),
         "{line}"
     );
+    assert!(line.contains("--drop-non-finite"), "{line}");
+    // On request the point is left out, said so, and the others are labelled.
+    let output = dir.path().join("out.xyz");
+    let run = bounded_paths(&[&"detect", &input, &"-o", &output, &"--drop-non-finite"]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(err.contains("left out 1 point with a NaN"), "{err}");
+    let table = bounded_data::format::read(&output).unwrap();
+    assert_eq!(table.len(), 500);
+    assert!(table.property("class").is_some());
 }
 
 #[test]

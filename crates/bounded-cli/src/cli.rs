@@ -58,6 +58,10 @@ pub struct DetectArgs {
     /// Neighbourhood sizes, largest first, overriding the model's (same count as the model's).
     #[arg(long, value_delimiter = ',')]
     pub scales: Option<Vec<usize>>,
+    /// Leave out points with a NaN or infinite coordinate (such as the invalid pixels of
+    /// organised PCL clouds) instead of refusing the file; the output holds the other points.
+    #[arg(long)]
+    pub drop_non_finite: bool,
 }
 
 /// Arguments of `train`.

@@ -77,16 +77,38 @@ impl Format {
 }
 
 /// Reads the cloud at `path`, in the format named by its extension, with every property.
+///
+/// A point with a NaN or infinite coordinate is an error naming it; [`read_finite`] leaves
+/// such points out instead.
 pub fn read(path: &Path) -> Result<PointTable, DataError> {
+    read_with(path, false).map(|(table, _)| table)
+}
+
+/// Reads the cloud at `path` like [`read`], but leaves out the points with a NaN or infinite
+/// coordinate (the invalid pixels of organised PCL clouds, for example) and returns how many
+/// it left out. The other points keep their order and every property.
+pub fn read_finite(path: &Path) -> Result<(PointTable, usize), DataError> {
+    read_with(path, true)
+}
+
+/// Reads `path`; with `drop_non_finite`, points with a non-finite coordinate are left out
+/// and counted. LAS coordinates are integers, always finite.
+fn read_with(path: &Path, drop_non_finite: bool) -> Result<(PointTable, usize), DataError> {
     let format = Format::from_path(path)?;
     let file = File::open(path).map_err(|e| DataError::io(path, e))?;
     let input = BufReader::with_capacity(1 << 20, file);
-    match format {
-        Format::Ply => crate::ply::read_from(input, path),
-        Format::Pcd => crate::pcd::read_from(input, path),
-        Format::Xyz(_) => crate::xyz::read_from(input, path),
-        Format::Las { .. } => crate::las::read_from(input, path),
-    }
+    let mut properties = match format {
+        Format::Ply => crate::ply::read_properties(input, path)?,
+        Format::Pcd => crate::pcd::read_properties(input, path)?,
+        Format::Xyz(_) => crate::xyz::read_properties(input, path)?,
+        Format::Las { .. } => return Ok((crate::las::read_from(input, path)?, 0)),
+    };
+    let dropped = if drop_non_finite {
+        crate::table::drop_non_finite(&mut properties)
+    } else {
+        0
+    };
+    Ok((crate::table::from_properties(properties, path)?, dropped))
 }
 
 /// Writes `table` unchanged to `path`, in the format named by its extension.
@@ -479,6 +501,52 @@ mod tests {
                 assert_eq!(back, read_back, "{name} -> {ext}");
             }
         }
+    }
+
+    #[test]
+    fn non_finite_points_are_refused_or_left_out_on_request() {
+        let dir = tempfile::tempdir().unwrap();
+        let rows = [
+            "0 0 0 7",
+            "nan nan nan 8",
+            "1 0 0 9",
+            "0 inf 0 10",
+            "0 1 -inf 11",
+            "0 0 1 12",
+        ];
+        let ply = "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n\
+                   property float z\nproperty uchar tag\nend_header\n";
+        let pcd = "VERSION 0.7\nFIELDS x y z tag\nSIZE 4 4 4 1\nTYPE F F F U\nCOUNT 1 1 1 1\n\
+                   WIDTH 3\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 6\nDATA ascii\n";
+        let xyz = "x y z tag\n";
+        for (name, header) in [("o.ply", ply), ("o.pcd", pcd), ("o.xyz", xyz)] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, format!("{header}{}\n", rows.join("\n"))).unwrap();
+            let refused = read(&path).unwrap_err();
+            assert!(
+                refused
+                    .to_string()
+                    .contains("point 1 has a non-finite coordinate"),
+                "{name}: {refused}"
+            );
+            let (table, dropped) = read_finite(&path).unwrap();
+            assert_eq!(dropped, 3, "{name}");
+            let positions: Vec<_> = (0..table.len())
+                .map(|i| table.cloud.position_f64(i))
+                .collect();
+            assert_eq!(
+                positions,
+                [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+                "{name}"
+            );
+            let tag: Vec<_> = (0..3)
+                .map(|i| table.property("tag").unwrap().get_f64(i))
+                .collect();
+            assert_eq!(tag, [7.0, 9.0, 12.0], "{name}");
+        }
+        let all_bad = dir.path().join("bad.xyz");
+        std::fs::write(&all_bad, "nan 0 0\n0 nan 0\n").unwrap();
+        assert!(read_finite(&all_bad).is_err());
     }
 
     #[test]

@@ -152,7 +152,15 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
 }
 
 /// Reads a PCD file from `input`; `path` names it in errors.
-pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, DataError> {
+pub fn read_from(input: impl BufRead, path: &Path) -> Result<PointTable, DataError> {
+    crate::table::from_properties(read_properties(input, path)?, path)
+}
+
+/// The vertex properties of the file `input`, positions among them, not yet checked.
+pub(crate) fn read_properties(
+    mut input: impl BufRead,
+    path: &Path,
+) -> Result<Vec<Property>, DataError> {
     let header = parse_header(&mut input, path)?;
     let mut names = Vec::new();
     let mut types = Vec::new();
@@ -202,7 +210,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
         .map(|(name, values)| Property::new(name, values))
         .collect();
     unpack_colours(&mut properties);
-    crate::table::from_properties(properties, path)
+    Ok(properties)
 }
 
 fn read_compressed(

@@ -185,7 +185,15 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
 }
 
 /// Reads a PLY file from `input`; `path` names it in errors.
-pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, DataError> {
+pub fn read_from(input: impl BufRead, path: &Path) -> Result<PointTable, DataError> {
+    crate::table::from_properties(read_properties(input, path)?, path)
+}
+
+/// The vertex properties of the file `input`, positions among them, not yet checked.
+pub(crate) fn read_properties(
+    mut input: impl BufRead,
+    path: &Path,
+) -> Result<Vec<Property>, DataError> {
     let header = parse_header(&mut input, path)?;
     let Some(vertex_at) = header.elements.iter().position(|e| e.name == "vertex") else {
         return Err(DataError::malformed(
@@ -259,7 +267,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
         .zip(columns)
         .map(|((name, _), values)| Property::new(name.clone(), values))
         .collect();
-    crate::table::from_properties(properties, path)
+    Ok(properties)
 }
 
 fn skip_ascii_items(

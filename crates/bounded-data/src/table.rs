@@ -236,6 +236,14 @@ impl Column {
         self.len() == 0
     }
 
+    /// Keeps the values `i` with `keep[i]` true, in order (`keep` has one flag per value).
+    pub(crate) fn retain(&mut self, keep: &[bool]) {
+        with_values!(self, v => {
+            let mut flags = keep.iter();
+            v.retain(|_| flags.next().copied().unwrap_or(false));
+        })
+    }
+
     /// Value `i` as `f64` (exact for every type). Panics when `i` is out of range, like
     /// slice indexing.
     pub fn get_f64(&self, i: usize) -> f64 {
@@ -577,6 +585,30 @@ impl TableView<'_> {
             _ => p,
         }
     }
+}
+
+/// Leaves out of every column the points whose `x`, `y` or `z` is NaN or infinite, and returns
+/// how many that were (none when a coordinate column is missing: [`from_properties`] names it).
+pub(crate) fn drop_non_finite(properties: &mut [Property]) -> usize {
+    let column = |name: &str| {
+        properties
+            .iter()
+            .find(|p| p.name.eq_ignore_ascii_case(name))
+            .map(|p| &p.values)
+    };
+    let (Some(x), Some(y), Some(z)) = (column("x"), column("y"), column("z")) else {
+        return 0;
+    };
+    let keep: Vec<bool> = (0..x.len())
+        .map(|i| [x, y, z].iter().all(|c| c.get_f64(i).is_finite()))
+        .collect();
+    let dropped = keep.iter().filter(|&&k| !k).count();
+    if dropped > 0 {
+        for p in properties.iter_mut() {
+            p.values.retain(&keep);
+        }
+    }
+    dropped
 }
 
 /// Builds a table from a file's properties: the cloud from its `x`, `y`, `z` columns (any

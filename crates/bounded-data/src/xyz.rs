@@ -47,7 +47,15 @@ fn is_comment(line: &str) -> bool {
 }
 
 /// Reads a text point file from `input`; `path` names it in errors.
-pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, DataError> {
+pub fn read_from(input: impl BufRead, path: &Path) -> Result<PointTable, DataError> {
+    crate::table::from_properties(read_properties(input, path)?, path)
+}
+
+/// The vertex properties of the file `input`, positions among them, not yet checked.
+pub(crate) fn read_properties(
+    mut input: impl BufRead,
+    path: &Path,
+) -> Result<Vec<Property>, DataError> {
     let mut buf = Vec::new();
     let mut line_no = 0;
     let mut header: Option<String> = None;
@@ -105,7 +113,7 @@ pub fn read_from(mut input: impl BufRead, path: &Path) -> Result<PointTable, Dat
         .zip(columns)
         .map(|(name, values)| Property::new(name, values))
         .collect();
-    crate::table::from_properties(properties, path)
+    Ok(properties)
 }
 
 /// Column names from the header (or `x y z column_4 ...`), positions first when the header

@@ -4,7 +4,9 @@ use super::{rate, sources};
 use crate::cli::DetectArgs;
 use crate::{pipeline, progress};
 use anyhow::{Context, Result, bail};
+use bounded_data::DataError;
 use bounded_data::format::{self, Format};
+use bounded_geom::GeomError;
 use std::time::Instant;
 
 pub fn run(args: &DetectArgs) -> Result<()> {
@@ -22,9 +24,23 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
 
     let reading = progress::spinner("read");
-    let table = format::read(&args.input);
+    let read = if args.drop_non_finite {
+        format::read_finite(&args.input)
+    } else {
+        format::read(&args.input).map(|table| (table, 0))
+    };
     reading.finish_and_clear();
-    let table = table?;
+    let (table, dropped) = read.map_err(|e| match e {
+        DataError::Geom {
+            source: GeomError::NonFinite { .. },
+            ..
+        } => anyhow::anyhow!("{e} (--drop-non-finite leaves such points out)"),
+        e => e.into(),
+    })?;
+    if dropped > 0 {
+        let points = if dropped == 1 { "point" } else { "points" };
+        eprintln!("left out {dropped} {points} with a NaN or infinite coordinate");
+    }
     let n = table.len();
     let detection = pipeline::detect(&table.cloud, &classifier, &config, true)
         .with_context(|| args.input.display().to_string())?;
