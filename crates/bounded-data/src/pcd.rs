@@ -156,7 +156,8 @@ pub fn read_from(input: impl BufRead, path: &Path) -> Result<PointTable, DataErr
     crate::table::from_properties(read_properties(input, path)?, path)
 }
 
-/// The vertex properties of the file `input`, positions among them, not yet checked.
+/// The fields of the PCD file `input`, positions among them, not yet checked (packed
+/// colours unpacked).
 pub(crate) fn read_properties(
     mut input: impl BufRead,
     path: &Path,

@@ -189,7 +189,8 @@ pub fn read_from(input: impl BufRead, path: &Path) -> Result<PointTable, DataErr
     crate::table::from_properties(read_properties(input, path)?, path)
 }
 
-/// The vertex properties of the file `input`, positions among them, not yet checked.
+/// The vertex properties of the PLY file `input`, positions among them, not yet checked
+/// (see [`crate::table::from_properties`]).
 pub(crate) fn read_properties(
     mut input: impl BufRead,
     path: &Path,

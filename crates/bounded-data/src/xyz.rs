@@ -51,7 +51,7 @@ pub fn read_from(input: impl BufRead, path: &Path) -> Result<PointTable, DataErr
     crate::table::from_properties(read_properties(input, path)?, path)
 }
 
-/// The vertex properties of the file `input`, positions among them, not yet checked.
+/// The columns of the text file `input`, positions among them, not yet checked.
 pub(crate) fn read_properties(
     mut input: impl BufRead,
     path: &Path,
