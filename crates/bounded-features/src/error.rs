@@ -8,6 +8,18 @@ pub enum FeatureError {
     /// largest scale).
     #[error(transparent)]
     Geom(#[from] GeomError),
+    /// Fewer distinct positions than the largest scale needs (repeated points count once).
+    #[error(
+        "the cloud has {points} points but only {distinct} distinct positions, and the largest scale needs {k} neighbours; choose scales of at most {distinct}"
+    )]
+    TooFewDistinctPoints {
+        /// Number of points in the cloud.
+        points: usize,
+        /// Number of distinct positions among them.
+        distinct: usize,
+        /// Neighbours requested.
+        k: usize,
+    },
     /// The scale list is unusable.
     #[error("invalid scales {scales:?}: {reason}")]
     InvalidScales {

@@ -1,6 +1,6 @@
 //! Feature extraction over a whole cloud, streamed in Morton-ordered blocks.
 
-use bounded_geom::{KnnIndex, PointCloud};
+use bounded_geom::{Distinct, GeomError, KnnIndex, PointCloud};
 use rayon::prelude::*;
 
 use crate::local::{LANES, Scratch, group_features};
@@ -111,6 +111,9 @@ pub fn extract(cloud: &PointCloud, config: &FeatureConfig) -> Result<Features, F
 /// Streams the features of every point of `cloud` to `f`, in blocks of at most
 /// `chunk_points` points (Morton order; 0 counts as 1), each point exactly once.
 ///
+/// Points that repeat a position count once in every neighbourhood and share its features
+/// (see [`Distinct`]): a cloud gives the same features stored once or with repeats.
+///
 /// Memory is `O(chunk_points x (k0 + values per point))` beyond the cloud and its
 /// search index, so huge clouds can be classified block by block. Each block is
 /// computed in parallel on the current rayon pool; `f` runs on the calling thread.
@@ -121,6 +124,41 @@ pub fn extract_chunks(
     mut f: impl FnMut(&FeatureBlock),
 ) -> Result<(), FeatureError> {
     config.validate()?;
+    let Some(distinct) = Distinct::of(cloud) else {
+        return extract_distinct(cloud, config, chunk_points, f);
+    };
+    let mut shared = FeatureBlock::default();
+    extract_distinct(distinct.cloud(), config, chunk_points, |block| {
+        shared.per_point = block.per_point;
+        shared.points.clear();
+        shared.values.clear();
+        for (row, &u) in block.points.iter().enumerate() {
+            for &i in distinct.members(u as usize) {
+                shared.points.push(i);
+                shared.values.extend_from_slice(block.row(row));
+            }
+        }
+        f(&shared);
+    })
+    .map_err(|e| match e {
+        FeatureError::Geom(GeomError::TooFewPoints { points, k }) => {
+            FeatureError::TooFewDistinctPoints {
+                points: cloud.len(),
+                distinct: points,
+                k,
+            }
+        }
+        e => e,
+    })
+}
+
+/// [`extract_chunks`] on a cloud whose positions are all distinct.
+fn extract_distinct(
+    cloud: &PointCloud,
+    config: &FeatureConfig,
+    chunk_points: usize,
+    mut f: impl FnMut(&FeatureBlock),
+) -> Result<(), FeatureError> {
     let index = KnnIndex::new(cloud)?;
     let k0 = config.largest_scale();
     let points = cloud.points();

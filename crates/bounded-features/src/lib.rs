@@ -12,6 +12,9 @@
 //!   finite (all neighbours identical), so output is always finite;
 //! - the normal is oriented so the query point lies on its upper side, and, when the
 //!   query point lies exactly in the plane, so its first non-zero component is positive;
+//! - points that repeat a position count once: the neighbourhoods are those of the
+//!   distinct positions, whose features the repeats share, so a cloud stored with repeats
+//!   (real scans have them) gets the features of the same cloud stored once;
 //! - the normal of `floor(k/2) = 0` points (k = 1) and of fully degenerate
 //!   neighbourhoods is `[0, 0, 1]`; sets with fewer than 2 points have zero `sigma`,
 //!   and `d` is zero when either set is empty.

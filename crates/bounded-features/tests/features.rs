@@ -326,12 +326,6 @@ fn identical_whatever_the_chunking_and_thread_count() {
 
 #[test]
 fn degenerate_clouds_give_finite_features() {
-    let same = run(&[[3.0, -2.0, 1e6]; 40], &[32, 8]);
-    assert!(
-        same.as_slice().iter().all(|&v| v == 0.0),
-        "{:?}",
-        same.point(0)
-    );
     let line: Vec<_> = (0..40)
         .map(|i| [i as f64, 2.0 * i as f64, -(i as f64)])
         .collect();
@@ -343,7 +337,34 @@ fn degenerate_clouds_give_finite_features() {
     let dup: Vec<_> = (0..60)
         .map(|i| [(i % 3) as f64, 0.0, ((i / 3) % 2) as f64])
         .collect();
-    assert!(run(&dup, &[32, 4]).as_slice().iter().all(|v| v.is_finite()));
+    assert!(run(&dup, &[6, 4]).as_slice().iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn repeated_points_share_the_features_of_their_position() {
+    // A crease (a roof ridge), then the same points again with every third one three times.
+    let once = surface(16, 0.02, 9, |x, _| -x.abs());
+    let mut repeated = once.clone();
+    repeated.extend_from_slice(&once);
+    repeated.extend(once.iter().step_by(3));
+    let (a, b) = (run(&once, &[64, 16]), run(&repeated, &[64, 16]));
+    let n = once.len();
+    for (j, _) in repeated.iter().enumerate() {
+        let i = if j < 2 * n { j % n } else { 3 * (j - 2 * n) };
+        assert_eq!(b.point(j), a.point(i), "point {j}, a repeat of {i}");
+    }
+    // Fewer distinct positions than the largest scale: said as such.
+    let same = PointCloud::from_f64(&[[3.0, -2.0, 1e6]; 40]).unwrap();
+    let e = extract(&same, &config(&[32, 8])).unwrap_err();
+    assert_eq!(
+        e,
+        FeatureError::TooFewDistinctPoints {
+            points: 40,
+            distinct: 1,
+            k: 32
+        }
+    );
+    assert!(e.to_string().contains("only 1 distinct positions"), "{e}");
 }
 
 #[test]

@@ -14,7 +14,8 @@
 //! best-first in the octree above the grid. Neighbours come sorted by `f32`
 //! squared distance, the point itself first, ties by index, so every smaller `k` is a
 //! prefix. [`Sym3`] solves the small symmetric eigen problems of the local statistics
-//! in closed form.
+//! in closed form. [`Distinct`] collapses repeated positions, so that a neighbourhood
+//! counts each position once.
 //!
 //! ```
 //! use bounded_geom::{KnnIndex, PointCloud};
@@ -30,6 +31,7 @@
 
 mod class;
 mod cloud;
+mod distinct;
 mod eigen;
 mod error;
 mod grid;
@@ -42,6 +44,7 @@ mod smallest;
 
 pub use class::Class;
 pub use cloud::PointCloud;
+pub use distinct::Distinct;
 pub use eigen::{Eigen3, Sym3, cross, dot, eigenvalues_batch};
 pub use error::GeomError;
 pub use knn::{KnnIndex, NeighbourChunk};

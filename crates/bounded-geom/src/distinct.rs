@@ -1,0 +1,128 @@
+//! Exact duplicate positions, collapsed so that a neighbourhood counts each position once.
+//!
+//! Real scans repeat points (overlapping flight lines, a registration that appends a frame
+//! twice, a room scan with every point stored twice). A repeated point carries no geometry,
+//! but it takes a place among the `k` nearest neighbours and so shrinks every scale: the
+//! same surface would be labelled differently stored once or twice. Features are therefore
+//! computed on the distinct positions and shared by the points that repeat them.
+
+use crate::PointCloud;
+use rayon::prelude::*;
+
+/// The distinct positions of a cloud and, for each, the points that share it.
+#[derive(Debug, Clone)]
+pub struct Distinct {
+    cloud: PointCloud,
+    /// Members of distinct point `u`: `members[starts[u]..starts[u + 1]]`.
+    starts: Vec<u32>,
+    members: Vec<u32>,
+}
+
+impl Distinct {
+    /// The distinct positions of `cloud`, in the order of their first occurrence, or `None`
+    /// when no position repeats (then nothing is copied).
+    ///
+    /// Positions are equal when their coordinates are (`-0.0` equals `0.0`). Costs a
+    /// parallel sort of 16 bytes per point, freed before it returns.
+    pub fn of(cloud: &PointCloud) -> Option<Self> {
+        let points = cloud.points();
+        if u32::try_from(points.len()).is_err() {
+            return None; // the neighbour search refuses such clouds with its own error
+        }
+        let mut keyed: Vec<([u32; 3], u32)> = points
+            .par_iter()
+            .enumerate()
+            // Adding 0.0 turns -0.0 into 0.0, so equal values have equal bits.
+            .map(|(i, p)| (p.map(|c| (c + 0.0).to_bits()), i as u32))
+            .collect();
+        keyed.par_sort_unstable();
+        if !keyed.par_windows(2).any(|w| w[0].0 == w[1].0) {
+            return None;
+        }
+        // For each point, the first (smallest) index of its position: groups are sorted by
+        // index, so that is the group's first entry.
+        let mut of = vec![0u32; points.len()];
+        for group in keyed.chunk_by(|a, b| a.0 == b.0) {
+            for &(_, i) in group {
+                of[i as usize] = group[0].1;
+            }
+        }
+        drop(keyed);
+        // Number the first occurrences in index order; a repeat takes its first's number,
+        // already assigned as the first comes earlier.
+        let mut distinct = Vec::new();
+        for i in 0..of.len() {
+            let first = of[i] as usize;
+            if first == i {
+                of[i] = distinct.len() as u32;
+                distinct.push(points[i]);
+            } else {
+                of[i] = of[first];
+            }
+        }
+        let mut starts = vec![0u32; distinct.len() + 1];
+        for &u in &of {
+            starts[u as usize + 1] += 1;
+        }
+        for u in 0..distinct.len() {
+            starts[u + 1] += starts[u];
+        }
+        let mut fill = starts.clone();
+        let mut members = vec![0u32; of.len()];
+        for (i, &u) in of.iter().enumerate() {
+            members[fill[u as usize] as usize] = i as u32;
+            fill[u as usize] += 1;
+        }
+        Some(Self {
+            cloud: cloud.with_points(distinct),
+            starts,
+            members,
+        })
+    }
+
+    /// The distinct positions (same origin as the cloud they come from).
+    pub fn cloud(&self) -> &PointCloud {
+        &self.cloud
+    }
+
+    /// The indices of the original points at distinct position `u`, increasing.
+    pub fn members(&self, u: usize) -> &[u32] {
+        &self.members[self.starts[u] as usize..self.starts[u + 1] as usize]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repeats_collapse_in_first_occurrence_order() {
+        let cloud = PointCloud::from_local(
+            [10.0; 3],
+            vec![
+                [1.0, 0.0, 0.0],
+                [0.0, 2.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 0.0, -0.0],
+                [0.0, 2.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+            ],
+        )
+        .unwrap();
+        let d = Distinct::of(&cloud).unwrap();
+        let expected =
+            PointCloud::from_local([10.0; 3], vec![[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0; 3]])
+                .unwrap();
+        assert_eq!(d.cloud(), &expected);
+        assert_eq!(d.members(0), [0, 2, 6]);
+        assert_eq!(d.members(1), [1, 4]);
+        assert_eq!(d.members(2), [3, 5]);
+    }
+
+    #[test]
+    fn distinct_clouds_are_not_copied() {
+        let cloud = PointCloud::from_f64(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).unwrap();
+        assert!(Distinct::of(&cloud).is_none());
+    }
+}
