@@ -112,7 +112,8 @@ pub fn extract(cloud: &PointCloud, config: &FeatureConfig) -> Result<Features, F
 /// `chunk_points` points (Morton order; 0 counts as 1), each point exactly once.
 ///
 /// Points that repeat a position count once in every neighbourhood and share its features
-/// (see [`Distinct`]): a cloud gives the same features stored once or with repeats.
+/// (see [`Distinct`]): a cloud gives the same features stored once or with repeats. A block
+/// then holds at most `chunk_points` distinct positions, each followed by its repeats.
 ///
 /// Memory is `O(chunk_points x (k0 + values per point))` beyond the cloud and its
 /// search index, so huge clouds can be classified block by block. Each block is
