@@ -42,15 +42,17 @@ impl Distinct {
         // For each point, the first (smallest) index of its position: groups are sorted by
         // index, so that is the group's first entry.
         let mut of = vec![0u32; points.len()];
+        let mut groups = 0;
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
             for &(_, i) in group {
                 of[i as usize] = group[0].1;
             }
+            groups += 1;
         }
         drop(keyed);
         // Number the first occurrences in index order; a repeat takes its first's number,
         // already assigned as the first comes earlier.
-        let mut distinct = Vec::new();
+        let mut distinct = Vec::with_capacity(groups);
         for i in 0..of.len() {
             let first = of[i] as usize;
             if first == i {
