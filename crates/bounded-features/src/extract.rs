@@ -126,15 +126,16 @@ pub fn extract_chunks(
 ) -> Result<(), FeatureError> {
     config.validate()?;
     let Some(distinct) = Distinct::of(cloud) else {
-        return extract_distinct(cloud, config, chunk_points, f);
+        return extract_indexed(cloud, &KnnIndex::new(cloud)?, config, chunk_points, f);
     };
     let mut shared = FeatureBlock::default();
-    extract_distinct(distinct.cloud(), config, chunk_points, |block| {
+    let index = KnnIndex::of_subset(cloud, distinct.firsts())?;
+    extract_indexed(cloud, &index, config, chunk_points, |block| {
         shared.per_point = block.per_point;
         shared.points.clear();
         shared.values.clear();
-        for (row, &u) in block.points.iter().enumerate() {
-            for &i in distinct.members(u as usize) {
+        for (row, &first) in block.points.iter().enumerate() {
+            for &i in distinct.members(first) {
                 shared.points.push(i);
                 shared.values.extend_from_slice(block.row(row));
             }
@@ -153,14 +154,14 @@ pub fn extract_chunks(
     })
 }
 
-/// [`extract_chunks`] on a cloud whose positions are all distinct.
-fn extract_distinct(
+/// [`extract_chunks`] for the points `index` holds, whose positions are all distinct.
+fn extract_indexed(
     cloud: &PointCloud,
+    index: &KnnIndex,
     config: &FeatureConfig,
     chunk_points: usize,
     mut f: impl FnMut(&FeatureBlock),
 ) -> Result<(), FeatureError> {
-    let index = KnnIndex::new(cloud)?;
     let k0 = config.largest_scale();
     let points = cloud.points();
     let mut block = FeatureBlock {

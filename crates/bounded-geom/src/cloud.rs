@@ -73,14 +73,6 @@ impl PointCloud {
         Ok(Self { origin, points })
     }
 
-    /// A cloud of some of this cloud's points (finite, as they are), on the same origin.
-    pub(crate) fn with_points(&self, points: Vec<[f32; 3]>) -> Self {
-        Self {
-            origin: self.origin,
-            points,
-        }
-    }
-
     /// Number of points.
     pub fn len(&self) -> usize {
         self.points.len()

@@ -9,20 +9,23 @@
 use crate::PointCloud;
 use rayon::prelude::*;
 
-/// The distinct positions of a cloud and, for each, the points that share it.
+/// The distinct positions of a cloud, each named by the first point there, and the points
+/// that share it. Holds indices only (8 bytes per point and 4 per position): the positions
+/// stay in the cloud, which [`KnnIndex::of_subset`](crate::KnnIndex::of_subset) searches.
 #[derive(Debug, Clone)]
 pub struct Distinct {
-    cloud: PointCloud,
-    /// Members of distinct point `u`: `members[starts[u]..starts[u + 1]]`.
+    /// The first point at each position, increasing.
+    firsts: Vec<u32>,
+    /// Points at position `u`: `members[starts[u]..starts[u + 1]]`.
     starts: Vec<u32>,
     members: Vec<u32>,
 }
 
 impl Distinct {
-    /// The distinct positions of `cloud`, in the order of their first occurrence, or `None`
-    /// when no position repeats (then nothing is copied).
+    /// The distinct positions of `cloud`, or `None` when no position repeats (then nothing
+    /// is allocated beyond the check).
     ///
-    /// Positions are equal when their coordinates are (`-0.0` equals `0.0`). Costs a
+    /// Positions are equal when the cloud's coordinates are (`-0.0` equals `0.0`). Costs a
     /// parallel sort of 16 bytes per point, freed before it returns.
     pub fn of(cloud: &PointCloud) -> Option<Self> {
         let points = cloud.points();
@@ -50,23 +53,23 @@ impl Distinct {
             groups += 1;
         }
         drop(keyed);
-        // Number the first occurrences in index order; a repeat takes its first's number,
-        // already assigned as the first comes earlier.
-        let mut distinct = Vec::with_capacity(groups);
+        // Number the positions in the order of their first points; a repeat takes its
+        // first's number, already assigned as the first comes earlier.
+        let mut firsts = Vec::with_capacity(groups);
         for i in 0..of.len() {
             let first = of[i] as usize;
             if first == i {
-                of[i] = distinct.len() as u32;
-                distinct.push(points[i]);
+                of[i] = firsts.len() as u32;
+                firsts.push(i as u32);
             } else {
                 of[i] = of[first];
             }
         }
-        let mut starts = vec![0u32; distinct.len() + 1];
+        let mut starts = vec![0u32; firsts.len() + 1];
         for &u in &of {
             starts[u as usize + 1] += 1;
         }
-        for u in 0..distinct.len() {
+        for u in 0..firsts.len() {
             starts[u + 1] += starts[u];
         }
         let mut fill = starts.clone();
@@ -76,20 +79,24 @@ impl Distinct {
             fill[u as usize] += 1;
         }
         Some(Self {
-            cloud: cloud.with_points(distinct),
+            firsts,
             starts,
             members,
         })
     }
 
-    /// The distinct positions (same origin as the cloud they come from).
-    pub fn cloud(&self) -> &PointCloud {
-        &self.cloud
+    /// The first point at each distinct position, increasing.
+    pub fn firsts(&self) -> &[u32] {
+        &self.firsts
     }
 
-    /// The indices of the original points at distinct position `u`, increasing.
-    pub fn members(&self, u: usize) -> &[u32] {
-        &self.members[self.starts[u] as usize..self.starts[u + 1] as usize]
+    /// The points at the position of `first` (itself included), increasing; empty when
+    /// `first` is not one of [`firsts`](Self::firsts).
+    pub fn members(&self, first: u32) -> &[u32] {
+        match self.firsts.binary_search(&first) {
+            Ok(u) => &self.members[self.starts[u] as usize..self.starts[u + 1] as usize],
+            Err(_) => &[],
+        }
     }
 }
 
@@ -98,7 +105,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn repeats_collapse_in_first_occurrence_order() {
+    fn repeats_are_grouped_under_their_first_point() {
         let cloud = PointCloud::from_local(
             [10.0; 3],
             vec![
@@ -113,13 +120,11 @@ mod tests {
         )
         .unwrap();
         let d = Distinct::of(&cloud).unwrap();
-        let expected =
-            PointCloud::from_local([10.0; 3], vec![[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0; 3]])
-                .unwrap();
-        assert_eq!(d.cloud(), &expected);
+        assert_eq!(d.firsts(), [0, 1, 3]);
         assert_eq!(d.members(0), [0, 2, 6]);
         assert_eq!(d.members(1), [1, 4]);
-        assert_eq!(d.members(2), [3, 5]);
+        assert_eq!(d.members(3), [3, 5]);
+        assert_eq!(d.members(2), [] as [u32; 0]);
     }
 
     #[test]

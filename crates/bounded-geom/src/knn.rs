@@ -71,20 +71,46 @@ impl KnnIndex {
                 points: cloud_points.len(),
             });
         }
-        let quant = Quantiser::new(cloud_points);
-        let sorted = sorted_codes(cloud_points, &quant);
+        Ok(Self::build(cloud_points, None))
+    }
+
+    /// Builds the index over the points `subset` of `cloud` alone (each index once, as in
+    /// [`Distinct::firsts`](crate::Distinct::firsts)): queries and neighbours are the
+    /// cloud's own indices, so their positions are read from `cloud` without a copy of it.
+    /// Fails with `NoSuchPoint` for an index past the cloud's end and `Empty` for no index.
+    pub fn of_subset(cloud: &PointCloud, subset: &[u32]) -> Result<Self, GeomError> {
+        let all = cloud.points();
+        if let Some(&index) = subset.iter().find(|&&i| i as usize >= all.len()) {
+            return Err(GeomError::NoSuchPoint {
+                index: index as usize,
+                points: all.len(),
+            });
+        }
+        if subset.is_empty() {
+            return Err(GeomError::Empty);
+        }
+        Ok(Self::build(all, Some(subset)))
+    }
+
+    /// The index of the points `subset` of `all` (all of them for `None`), read in place.
+    fn build(all: &[[f32; 3]], subset: Option<&[u32]>) -> Self {
+        let len = subset.map_or(all.len(), <[u32]>::len);
+        let original = |i: usize| subset.map_or(i as u32, |s| s[i]);
+        let point = |i: usize| all[original(i) as usize];
+        let quant = Quantiser::new((0..len).map(point));
+        let sorted = sorted_codes(len, point, &quant);
         // In parallel: reading the points in Morton order misses the cache at every point
         // of a randomly ordered cloud.
-        let points = sorted
+        let points = sorted.par_iter().map(|&(_, i)| point(i as usize)).collect();
+        let order = sorted
             .par_iter()
-            .map(|&(_, i)| cloud_points[i as usize])
+            .map(|&(_, i)| original(i as usize))
             .collect();
-        let order = sorted.par_iter().map(|&(_, i)| i).collect();
-        Ok(Self {
+        Self {
             quant,
             points,
             order,
-        })
+        }
     }
 
     /// Number of indexed points.
@@ -258,6 +284,38 @@ mod tests {
             .unwrap();
             assert_eq!(seen, pts.len());
         }
+    }
+
+    #[test]
+    fn a_subset_is_searched_with_the_clouds_own_indices() {
+        let pts = mixed_cloud(600);
+        let c = cloud(pts.clone());
+        let subset: Vec<u32> = (0..pts.len() as u32).filter(|i| i % 3 != 1).collect();
+        let own: Vec<[f32; 3]> = subset.iter().map(|&i| pts[i as usize]).collect();
+        let idx = KnnIndex::of_subset(&c, &subset).unwrap();
+        assert_eq!(idx.len(), subset.len());
+        let mut seen = 0;
+        idx.for_each_chunk(16, 100, |ch| {
+            for (j, &q) in ch.queries().iter().enumerate() {
+                let local = subset.binary_search(&q).unwrap() as u32;
+                let expected: Vec<u32> = brute(&own, local, 16)
+                    .iter()
+                    .map(|&l| subset[l as usize])
+                    .collect();
+                assert_eq!(ch.row(j), expected.as_slice(), "query {q}");
+                seen += 1;
+            }
+        })
+        .unwrap();
+        assert_eq!(seen, subset.len());
+        assert_eq!(KnnIndex::of_subset(&c, &[]).err(), Some(GeomError::Empty));
+        assert_eq!(
+            KnnIndex::of_subset(&c, &[0, 5000]).err(),
+            Some(GeomError::NoSuchPoint {
+                index: 5000,
+                points: pts.len()
+            })
+        );
     }
 
     /// Consecutive queries of a cell prune candidates with the previous query's k-th

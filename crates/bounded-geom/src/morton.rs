@@ -18,7 +18,7 @@ pub(crate) struct Quantiser {
 }
 
 impl Quantiser {
-    pub(crate) fn new(points: &[[f32; 3]]) -> Self {
+    pub(crate) fn new(points: impl IntoIterator<Item = [f32; 3]>) -> Self {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for p in points {
@@ -53,18 +53,23 @@ pub(crate) fn code(c: [u64; 3]) -> u64 {
 /// box, ties by index. Consecutive indices are spatially close, so neighbouring
 /// queries touch the same memory.
 pub fn morton_order(points: &[[f32; 3]]) -> Vec<u32> {
-    sorted_codes(points, &Quantiser::new(points))
+    let quant = Quantiser::new(points.iter().copied());
+    sorted_codes(points.len(), |i| points[i], &quant)
         .into_iter()
         .map(|(_, i)| i)
         .collect()
 }
 
-/// (code, index) pairs sorted by code, then index. Indices must fit in `u32`.
-pub(crate) fn sorted_codes(points: &[[f32; 3]], quant: &Quantiser) -> Vec<(u64, u32)> {
-    let mut keyed: Vec<(u64, u32)> = points
-        .par_iter()
-        .enumerate()
-        .map(|(i, p)| (code(quant.cell(*p)), i as u32))
+/// (code, index) pairs of the `len` points `point(i)`, sorted by code, then index. Indices
+/// must fit in `u32`.
+pub(crate) fn sorted_codes(
+    len: usize,
+    point: impl Fn(usize) -> [f32; 3] + Sync,
+    quant: &Quantiser,
+) -> Vec<(u64, u32)> {
+    let mut keyed: Vec<(u64, u32)> = (0..len)
+        .into_par_iter()
+        .map(|i| (code(quant.cell(point(i))), i as u32))
         .collect();
     keyed.par_sort_unstable();
     keyed
