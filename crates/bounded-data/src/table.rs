@@ -587,15 +587,18 @@ impl TableView<'_> {
     }
 }
 
+/// Where the coordinate property `axis` (`"x"`, `"y"` or `"z"`, in any case) is among
+/// `properties`: the one rule both [`from_properties`] and [`drop_non_finite`] read by.
+fn coordinate_at(properties: &[Property], axis: &str) -> Option<usize> {
+    properties
+        .iter()
+        .position(|p| p.name.eq_ignore_ascii_case(axis))
+}
+
 /// Leaves out of every column the points whose `x`, `y` or `z` is NaN or infinite, and returns
 /// how many that were (none when a coordinate column is missing: [`from_properties`] names it).
 pub(crate) fn drop_non_finite(properties: &mut [Property]) -> usize {
-    let column = |name: &str| {
-        properties
-            .iter()
-            .find(|p| p.name.eq_ignore_ascii_case(name))
-            .map(|p| &p.values)
-    };
+    let column = |axis| coordinate_at(properties, axis).map(|at| &properties[at].values);
     let (Some(x), Some(y), Some(z)) = (column("x"), column("y"), column("z")) else {
         return 0;
     };
@@ -617,13 +620,10 @@ pub(crate) fn from_properties(
     mut properties: Vec<Property>,
     path: &std::path::Path,
 ) -> Result<PointTable, crate::DataError> {
-    let mut take = |name: &str| {
-        let at = properties
-            .iter()
-            .position(|p| p.name.eq_ignore_ascii_case(name))
-            .ok_or_else(|| {
-                crate::DataError::malformed(path, "the points have no x, y and z properties")
-            })?;
+    let mut take = |axis| {
+        let at = coordinate_at(&properties, axis).ok_or_else(|| {
+            crate::DataError::malformed(path, "the points have no x, y and z properties")
+        })?;
         Ok::<_, crate::DataError>(properties.remove(at).values)
     };
     let x = take("x")?;
