@@ -43,7 +43,10 @@ use crate::table::{
 };
 use las::point::Format as LasFormat;
 use las::raw::header::LargeFile;
-use las::{Builder, Header, PointDataBuilder, Reader, Transform, Vector, Version, Vlr, Writer};
+use las::{
+    Builder, Header, LazParallelism, PointDataBuilder, Reader, ReaderOptions, Transform, Vector,
+    Version, Vlr, Writer, WriterOptions,
+};
 use rayon::prelude::*;
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::Path;
@@ -58,6 +61,13 @@ pub const CODE_BOUNDARY: u8 = 65;
 /// Records encoded per parallel task when writing: small enough to spread a block over the
 /// cores, large enough to amortise the per-field dispatch.
 const TASK: usize = 4096;
+
+/// Records per block when writing LAZ, at most 32 MiB: the LAZ compressor works on whole
+/// chunks of 50,000 points in parallel, so a block spans ten of them to keep every core busy
+/// (blocks of 64k records would hand it one chunk at a time).
+fn laz_block_len(stride: usize) -> usize {
+    ((32 << 20) / stride.max(1)).clamp(1, 1 << 19)
+}
 
 /// Where a LAS field lives in a point record.
 #[derive(Debug, Clone, Copy)]
@@ -342,7 +352,11 @@ fn read_laz<R: Read + Seek + Send + Sync + 'static>(
         total, record_len, ..
     } = blocks;
     input.rewind().map_err(|e| DataError::io(path, e))?;
-    let mut reader = Reader::new(input).map_err(|e| las_error(path, e))?;
+    // The sequential decompressor: the parallel one cannot read files without a chunk table
+    // and sizes its buffers from the table's counts before checking them against the file,
+    // and here it would only compete with the column decoding for the same cores.
+    let options = ReaderOptions::default().with_laz_parallelism(LazParallelism::No);
+    let mut reader = Reader::with_options(input, options).map_err(|e| las_error(path, e))?;
     let mut data = PointDataBuilder::new().for_header(reader.header()).build();
     decode_blocks(blocks, 0, slots, |block, first| {
         let ends = |what: String| {
@@ -990,6 +1004,7 @@ fn encode_blocks(
     view: &TableView<'_>,
     plan: &Plan<'_>,
     path: &Path,
+    block_len: usize,
     mut sink: impl FnMut(&[u8]) -> Result<(), DataError> + Send,
 ) -> Result<Stats, DataError> {
     let stride = plan.record_len;
@@ -1004,7 +1019,7 @@ fn encode_blocks(
         stats = stats.merge(block_stats);
         Ok(())
     };
-    pipelined(view.len(), block_len(stride), stride, encode, |block, _| {
+    pipelined(view.len(), block_len, stride, encode, |block, _| {
         sink(block)
     })?;
     Ok(stats)
@@ -1021,7 +1036,10 @@ fn write_las<W: Write + Seek + Send>(
     let io = |e| DataError::io(path, e);
     let las = |e| las_error(path, e);
     plan.header.write_to(&mut out).map_err(las)?;
-    let stats = encode_blocks(view, plan, path, |block| out.write_all(block).map_err(io))?;
+    let block_len = block_len(plan.record_len);
+    let stats = encode_blocks(view, plan, path, block_len, |block| {
+        out.write_all(block).map_err(io)
+    })?;
     let raw = stats.raw_header(&plan.header).map_err(las)?;
     out.rewind().map_err(io)?;
     raw.write_to(&mut out).map_err(las)?;
@@ -1029,7 +1047,8 @@ fn write_las<W: Write + Seek + Send>(
     Ok(out)
 }
 
-/// Writes LAZ through the las crate's writer, which compresses and counts the records.
+/// Writes LAZ through the las crate's writer, which compresses the records (chunks in
+/// parallel) and counts them.
 fn write_laz<W: Write + Seek + Send + Sync + 'static>(
     out: W,
     view: &TableView<'_>,
@@ -1037,8 +1056,9 @@ fn write_laz<W: Write + Seek + Send + Sync + 'static>(
     path: &Path,
 ) -> Result<W, DataError> {
     let las = |e| las_error(path, e);
-    let mut writer = Writer::new(out, plan.header.clone()).map_err(las)?;
-    encode_blocks(view, plan, path, |block| {
+    let options = WriterOptions::default().with_laz_parallelism(LazParallelism::Yes);
+    let mut writer = Writer::with_options(out, plan.header.clone(), options).map_err(las)?;
+    encode_blocks(view, plan, path, laz_block_len(plan.record_len), |block| {
         let data = PointDataBuilder::new()
             .for_header(writer.header())
             .build_from_bytes(block.to_vec())
@@ -1259,6 +1279,25 @@ mod tests {
                 Some(&Column::U8(vec![1; 3]))
             );
         }
+    }
+
+    #[test]
+    fn laz_of_several_chunks_reads_back_like_las() {
+        // Two whole chunks of 50,000 points, compressed side by side, and a partial third.
+        let n = 130_000;
+        let cloud = PointCloud::from_iter_f64(n, |i| {
+            [i as f64 * 0.01, (i % 977) as f64 * 0.02, (i % 13) as f64]
+        })
+        .unwrap();
+        let mut t = PointTable::new(cloud);
+        let intensity = (0..n).map(|i| (i * 7919 % 65536) as u16).collect();
+        t.set_property(Property::new("intensity", Column::U16(intensity)));
+        let read = |compressed| {
+            read_from(Cursor::new(write_bytes(&t, compressed)), Path::new("t.las")).unwrap()
+        };
+        let (las, laz) = (read(false), read(true));
+        assert_eq!(laz.property("intensity"), t.property("intensity"));
+        assert_eq!(las, laz);
     }
 
     #[test]
