@@ -47,7 +47,7 @@ pub enum Command {
 /// Arguments of `detect`.
 #[derive(Debug, Args)]
 pub struct DetectArgs {
-    /// Input cloud (.ply .pcd .xyz .txt .csv .las .laz).
+    /// Input cloud (.ply .pcd .xyz .txt .csv .las .laz .e57).
     pub input: PathBuf,
     /// Output cloud; the format follows the extension.
     #[arg(short, long)]
@@ -59,7 +59,8 @@ pub struct DetectArgs {
     #[arg(long, value_delimiter = ',')]
     pub scales: Option<Vec<usize>>,
     /// Leave out points with a NaN or infinite coordinate (such as the invalid pixels of
-    /// organised PCL clouds) instead of refusing the file; the output holds the other points.
+    /// organised PCL clouds, or the no-return points of E57 scans) instead of refusing the
+    /// file; the output holds the other points.
     #[arg(long)]
     pub drop_non_finite: bool,
 }

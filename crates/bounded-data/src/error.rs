@@ -23,7 +23,9 @@ pub enum DataError {
         what: String,
     },
     /// The file extension names no supported format.
-    #[error("{path}: unknown point-cloud format (supported: .ply .pcd .xyz .txt .csv .las .laz)")]
+    #[error(
+        "{path}: unknown point-cloud format (supported: .ply .pcd .xyz .txt .csv .las .laz, and .e57 to read)"
+    )]
     UnknownFormat {
         /// The file.
         path: PathBuf,

@@ -53,6 +53,12 @@ pub enum Format {
     },
     /// Text, one point per line (`.xyz`, `.txt` space-separated, `.csv` comma-separated).
     Xyz(crate::xyz::Separator),
+    /// ASTM E57 (`.e57`), read only: the scans in the file's frame (poses applied, spherical
+    /// coordinates converted), joined in file order, with `intensity`, `red`, `green`, `blue`
+    /// (the file's values, NaN where absent) and `scan` (the index, when there are several).
+    /// Points the file marks as having no position come as NaN coordinates, which
+    /// [`read_finite`] leaves out.
+    E57,
 }
 
 impl Format {
@@ -69,10 +75,29 @@ impl Format {
             Some("las") => Ok(Format::Las { compressed: false }),
             Some("laz") => Ok(Format::Las { compressed: true }),
             Some("csv") => Ok(Format::Xyz(crate::xyz::Separator::Comma)),
+            Some("e57") => Ok(Format::E57),
             _ => Err(DataError::UnknownFormat {
                 path: path.to_path_buf(),
             }),
         }
+    }
+
+    /// The format to write `path` in: [`Format::from_path`], except that E57, which is only
+    /// read, is an error.
+    pub fn for_output(path: &Path) -> Result<Format, DataError> {
+        match Format::from_path(path)? {
+            Format::E57 => Err(not_written(path)),
+            format => Ok(format),
+        }
+    }
+}
+
+/// The error for writing a format that is only read.
+fn not_written(path: &Path) -> DataError {
+    DataError::InvalidOutput {
+        path: path.to_path_buf(),
+        what: "E57 is read but not written; write .ply or .las (or .laz .pcd .xyz .txt .csv)"
+            .into(),
     }
 }
 
@@ -96,12 +121,14 @@ pub fn read_finite(path: &Path) -> Result<(PointTable, usize), DataError> {
 fn read_with(path: &Path, drop_non_finite: bool) -> Result<(PointTable, usize), DataError> {
     let format = Format::from_path(path)?;
     let file = File::open(path).map_err(|e| DataError::io(path, e))?;
-    let input = BufReader::with_capacity(1 << 20, file);
+    let buffered = |file| BufReader::with_capacity(1 << 20, file);
     let mut properties = match format {
-        Format::Ply => crate::ply::read_properties(input, path)?,
-        Format::Pcd => crate::pcd::read_properties(input, path)?,
-        Format::Xyz(_) => crate::xyz::read_properties(input, path)?,
-        Format::Las { .. } => return Ok((crate::las::read_from(input, path)?, 0)),
+        Format::Ply => crate::ply::read_properties(buffered(file), path)?,
+        Format::Pcd => crate::pcd::read_properties(buffered(file), path)?,
+        Format::Xyz(_) => crate::xyz::read_properties(buffered(file), path)?,
+        // Unbuffered: the E57 reader seeks to every 1 KiB page, which empties a `BufReader`.
+        Format::E57 => crate::e57::read_properties(file, path)?,
+        Format::Las { .. } => return Ok((crate::las::read_from(buffered(file), path)?, 0)),
     };
     let dropped = if drop_non_finite {
         crate::table::drop_non_finite(&mut properties)
@@ -118,8 +145,9 @@ pub fn write(path: &Path, table: &PointTable) -> Result<(), DataError> {
 
 /// Writes `view` to `path`, in the format named by its extension.
 pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
-    let format = Format::from_path(path)?;
+    let format = Format::for_output(path)?;
     write_atomic(path, |file| match format {
+        Format::E57 => Err(not_written(path)),
         Format::Ply => {
             crate::ply::write_to(file, view, crate::ply::Encoding::BinaryLittleEndian, path)
         }

@@ -1,7 +1,8 @@
 //! Point-cloud formats, labelled datasets and the synthetic training-set generator for BoundED.
 //!
-//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ.
+//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, and E57 (read only).
 
+mod e57;
 mod error;
 mod labelled;
 mod records;
