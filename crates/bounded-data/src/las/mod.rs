@@ -1,0 +1,65 @@
+//! LAS / LAZ reader and writer (ASPRS LAS 1.0-1.4).
+//!
+//! The `las` crate reads and writes the header and the VLRs and compresses LAZ. Uncompressed
+//! point records are read and written here, in blocks of whole records at the fixed byte
+//! offsets of each field and decoded / encoded in parallel while the next block is read or
+//! the previous one written: several times faster than going through the crate's point
+//! buffers, and the point count is checked against the file size before anything is
+//! allocated for it.
+//!
+//! Reading decodes the point records column by column: coordinates as scaled integers
+//! (the scale and offset are kept in
+//! [`PositionType::Scaled`](crate::table::PositionType::Scaled)), and every other field as a
+//! property: `intensity`, `return_number`, `number_of_returns`, `classification`,
+//! `scan_angle_rank` (formats 0-5, degrees) or `scan_angle` (formats 6-10, units of
+//! 0.006 degrees), `user_data`, `point_source_id`, `gps_time`, `red`/`green`/`blue`, `nir`,
+//! and the one-bit flags (`synthetic`, `key_point`, `withheld`, `overlap`,
+//! `scanner_channel`, `scan_direction`, `edge_of_flight_line`) when any point sets them.
+//! Extra Bytes are decoded by their Extra Bytes VLR into named properties (untyped or
+//! 64-bit ones as one `u8` property per byte). Waveform packet fields are not kept.
+//!
+//! Writing produces LAS 1.4 with point format 6, 7 (with colour) or 8 (with NIR), so that
+//! classification codes above 31 fit. A `class` property (BoundED classes) goes to the
+//! Classification field with these codes:
+//!
+//! | BoundED class | LAS Classification |
+//! |---|---|
+//! | non-edge (0) | 1, "unclassified" |
+//! | sharp edge (1) | 64, first user-definable code |
+//! | boundary (2) | 65, user-definable |
+//!
+//! and an input `classification` is then kept as the extra-bytes property
+//! `input_classification`. Every property that is not a LAS field (for example `p_nonedge`,
+//! `p_sharp`, `p_boundary`) is written as Extra Bytes with an Extra Bytes VLR (user
+//! `LASF_Spec`, record 4), which PDAL and CloudCompare read as named dimensions. 8-bit
+//! colours are scaled to LAS's 16-bit range (x 257). Coordinates of a LAS input keep its
+//! scale and offset; other clouds get their bounding-box centre as offset and a power-of-ten
+//! scale fine enough for the cloud's `f32` precision.
+
+mod layout;
+mod read;
+#[cfg(test)]
+mod tests;
+mod write;
+
+use crate::DataError;
+use std::path::Path;
+
+pub use read::read_from;
+pub use write::write_to;
+
+/// LAS Classification code of BoundED's non-edge class ("unclassified").
+pub const CODE_NON_EDGE: u8 = 1;
+/// LAS Classification code of BoundED's sharp-edge class (user-definable range).
+pub const CODE_SHARP: u8 = 64;
+/// LAS Classification code of BoundED's boundary class (user-definable range).
+pub const CODE_BOUNDARY: u8 = 65;
+
+fn las_error(path: &Path, e: las::Error) -> DataError {
+    match e {
+        las::Error::Io(e) if e.kind() != std::io::ErrorKind::UnexpectedEof => {
+            DataError::io(path, e)
+        }
+        e => DataError::malformed(path, format!("LAS: {e}")),
+    }
+}

@@ -1,0 +1,368 @@
+//! Reading: the header through the `las` crate, the records in blocks decoded in parallel.
+
+use super::las_error;
+use super::layout::*;
+use crate::DataError;
+use crate::records::{BLOCK, block_len, pipelined, truncated};
+use crate::table::{
+    Column, Endian, ExactCloud, ExactPositions, PointTable, PositionType, Property,
+};
+use las::{Header, LazParallelism, PointDataBuilder, Reader, ReaderOptions, Transform, Vector};
+use rayon::prelude::*;
+use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
+/// Reads a LAS or LAZ file from `input`; `path` names it in errors.
+pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
+    input: R,
+    path: &Path,
+) -> Result<PointTable, DataError> {
+    read_in_blocks(input, path, BLOCK)
+}
+
+/// [`read_from`] with at most `max_block` records per block (tests set it small to cross
+/// block boundaries with a few points).
+pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
+    mut input: R,
+    path: &Path,
+    max_block: usize,
+) -> Result<PointTable, DataError> {
+    check_evlr_lengths(&mut input, path)?;
+    let header = Header::new(&mut input).map_err(|e| las_error(path, e))?;
+    let (names, slots, record_len) = record_fields(&header, path)?;
+    let total = usize::try_from(header.number_of_points()).map_err(|_| {
+        DataError::malformed(
+            path,
+            format!(
+                "LAS: {} points do not fit in memory",
+                header.number_of_points()
+            ),
+        )
+    })?;
+    let blocks = Blocks {
+        total,
+        record_len,
+        block_len: block_len(record_len).min(max_block),
+    };
+    let decoded = if header.point_format().is_compressed {
+        read_laz(input, blocks, &slots, path)?
+    } else {
+        read_las(input, blocks, &slots, path)?
+    };
+    into_table(header.transforms(), names, &slots, decoded, path)
+}
+
+/// Checks that every extended VLR fits in the file, then rewinds `input`: the las crate
+/// allocates an EVLR's stated length (up to 2^64 bytes) before reading it, so a corrupt
+/// length must fail here, not exhaust memory (found by fuzzing).
+fn check_evlr_lengths(mut input: impl Read + Seek, path: &Path) -> Result<(), DataError> {
+    let io = |e| DataError::io(path, e);
+    let raw = las::raw::Header::read_from(&mut input).map_err(|e| las_error(path, e))?;
+    let end = input.seek(SeekFrom::End(0)).map_err(io)?;
+    if let Some(evlr) = raw.evlr.filter(|e| e.number_of_evlrs > 0) {
+        let mut at = evlr.start_of_first_evlr;
+        for k in 0..evlr.number_of_evlrs {
+            // An EVLR header: reserved (2), user id (16), record id (2), length (8),
+            // description (32).
+            let mut head = [0u8; 60];
+            input.seek(SeekFrom::Start(at)).map_err(io)?;
+            input.read_exact(&mut head).map_err(|e| {
+                truncated(
+                    path,
+                    format!("LAS: extended VLR {k} starts past the end"),
+                    e,
+                )
+            })?;
+            let mut length = [0u8; 8];
+            length.copy_from_slice(&head[20..28]);
+            let length = u64::from_le_bytes(length);
+            at = at
+                .checked_add(60)
+                .and_then(|a| a.checked_add(length))
+                .filter(|&a| a <= end)
+                .ok_or_else(|| {
+                    DataError::malformed(
+                        path,
+                        format!(
+                            "LAS: extended VLR {k} claims {length} bytes, past the end of the {end}-byte file"
+                        ),
+                    )
+                })?;
+        }
+    }
+    input.rewind().map_err(io)
+}
+
+/// The names and slots of the fields of the records of `header` after x, y, z (the standard
+/// fields, the Extra Bytes), and the record length.
+fn record_fields(
+    header: &Header,
+    path: &Path,
+) -> Result<(Vec<String>, Vec<Slot>, usize), DataError> {
+    let format = header.point_format();
+    let (standard, base_len) = fields(format);
+    let record_len = usize::from(format.len());
+    let extra_len = usize::from(format.extra_bytes);
+    if base_len + extra_len != record_len {
+        return Err(DataError::malformed(
+            path,
+            "LAS: inconsistent point record length",
+        ));
+    }
+    let (names, slots) = standard
+        .into_iter()
+        .map(|(n, s)| (n.to_string(), s))
+        .chain(extra_fields(header, base_len, extra_len))
+        .unzip();
+    Ok((names, slots, record_len))
+}
+
+/// Reads the `total` uncompressed records that start at the position of `input`, after
+/// checking that the file holds them: a corrupt count fails before anything is allocated.
+fn read_las(
+    mut input: impl Read + Seek,
+    blocks: Blocks,
+    slots: &[Slot],
+    path: &Path,
+) -> Result<Decoded, DataError> {
+    let Blocks {
+        total, record_len, ..
+    } = blocks;
+    let io = |e| DataError::io(path, e);
+    let start = input.stream_position().map_err(io)?;
+    let end = input.seek(SeekFrom::End(0)).map_err(io)?;
+    input.seek(SeekFrom::Start(start)).map_err(io)?;
+    let held = end.saturating_sub(start) / record_len as u64;
+    if held < total as u64 {
+        return Err(DataError::malformed(
+            path,
+            format!(
+                "LAS: point data ends within point {held} of {total} (the file is {end} bytes)"
+            ),
+        ));
+    }
+    decode_blocks(blocks, total, slots, |block, first| {
+        input.read_exact(block).map_err(|e| {
+            let what = format!("LAS: point data ends within point {first} of {total}");
+            truncated(path, what, e)
+        })
+    })
+}
+
+/// Decompresses the `total` records of the LAZ file `input`. The columns grow with the
+/// records actually decoded (the compressed size does not bound the count), so a corrupt
+/// count ends in an error where the compressed data ends, not in a huge allocation.
+fn read_laz<R: Read + Seek + Send + Sync + 'static>(
+    mut input: R,
+    blocks: Blocks,
+    slots: &[Slot],
+    path: &Path,
+) -> Result<Decoded, DataError> {
+    let Blocks {
+        total, record_len, ..
+    } = blocks;
+    input.rewind().map_err(|e| DataError::io(path, e))?;
+    // The sequential decompressor: the parallel one cannot read files without a chunk table
+    // and sizes its buffers from the table's counts before checking them against the file,
+    // and here it would only compete with the column decoding for the same cores.
+    let options = ReaderOptions::default().with_laz_parallelism(LazParallelism::No);
+    let mut reader = Reader::with_options(input, options).map_err(|e| las_error(path, e))?;
+    let mut data = PointDataBuilder::new().for_header(reader.header()).build();
+    decode_blocks(blocks, 0, slots, |block, first| {
+        let ends = |what: String| {
+            let what = format!("LAS: point data ends within point {first} of {total}{what}");
+            DataError::malformed(path, what)
+        };
+        reader
+            .fill_points((block.len() / record_len) as u64, &mut data)
+            .map_err(|e| ends(format!(": {e}")))?;
+        let bytes = data.raw_bytes();
+        if bytes.len() != block.len() {
+            return Err(ends(String::new()));
+        }
+        block.copy_from_slice(bytes);
+        Ok(())
+    })
+}
+
+/// How the point records of a file are split into blocks.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Blocks {
+    /// The number of records.
+    total: usize,
+    record_len: usize,
+    /// Records per block.
+    block_len: usize,
+}
+
+/// Decoded point records: the coordinates as scaled integers, and one column per field.
+struct Decoded {
+    xyz: Vec<[i32; 3]>,
+    columns: Vec<Column>,
+}
+
+/// Decodes the records of `blocks` (x, y, z and one column per slot, each made with room for
+/// `capacity` values), block by block: `fill(block, first)` fills `block` with the records
+/// from `first` on while the previous block is decoded, its columns in parallel.
+fn decode_blocks(
+    blocks: Blocks,
+    capacity: usize,
+    slots: &[Slot],
+    fill: impl FnMut(&mut [u8], usize) -> Result<(), DataError>,
+) -> Result<Decoded, DataError> {
+    let columns = slots
+        .iter()
+        .map(|&s| {
+            let optional = matches!(s, Slot::Bits { optional: true, .. });
+            Column::with_capacity(s.scalar_type(), if optional { 0 } else { capacity })
+        })
+        .collect();
+    let mut out = Decoded {
+        xyz: Vec::with_capacity(capacity),
+        columns,
+    };
+    let Blocks {
+        total,
+        record_len,
+        block_len,
+    } = blocks;
+    pipelined(total, block_len, record_len, fill, |block, first| {
+        let (xyz, columns) = (&mut out.xyz, &mut out.columns);
+        rayon::join(
+            || xyz.extend(block.chunks_exact(record_len).map(coordinates)),
+            || {
+                columns
+                    .par_iter_mut()
+                    .zip(slots)
+                    .for_each(|(column, &slot)| decode(column, slot, block, record_len, first))
+            },
+        );
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// The x, y, z scaled integers at the start of `record`.
+pub(super) fn coordinates(record: &[u8]) -> [i32; 3] {
+    std::array::from_fn(|a| {
+        let mut v = [0u8; 4];
+        v.copy_from_slice(&record[4 * a..4 * a + 4]);
+        i32::from_le_bytes(v)
+    })
+}
+
+/// Appends the field `slot` of the records `bytes` (from record `first` on) to `column`; an
+/// optional flag stays empty while no point sets it, as in most files.
+pub(super) fn decode(column: &mut Column, slot: Slot, bytes: &[u8], stride: usize, first: usize) {
+    match (slot, column) {
+        (Slot::Plain { at, .. }, column) => {
+            column.decode_strided(bytes, stride, at, Endian::Little)
+        }
+        (
+            Slot::Bits {
+                at,
+                shift,
+                width,
+                optional,
+            },
+            Column::U8(v),
+        ) => {
+            let values = bytes
+                .chunks_exact(stride)
+                .map(|r| bits_of(r[at], shift, width));
+            if optional && v.is_empty() {
+                if values.clone().all(|b| b == 0) {
+                    return;
+                }
+                v.resize(first, 0);
+            }
+            v.extend(values);
+        }
+        (Slot::Bits { .. }, _) => unreachable!("bit fields are decoded into u8 columns"),
+    }
+}
+
+/// The table of the `decoded` records with the fields `names`, `slots`; the coordinates are
+/// scaled by the transforms `t`, and optional flags no point sets (empty columns) are left out.
+fn into_table(
+    t: &Vector<Transform>,
+    names: Vec<String>,
+    slots: &[Slot],
+    decoded: Decoded,
+    path: &Path,
+) -> Result<PointTable, DataError> {
+    let (cloud, exact_positions) = cloud_of(decoded.xyz, t).map_err(|source| DataError::Geom {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let columns = decoded.columns;
+    let properties = names
+        .into_iter()
+        .zip(columns)
+        .zip(slots)
+        .filter(|((_, values), slot)| {
+            !(matches!(slot, Slot::Bits { optional: true, .. }) && values.is_empty())
+        })
+        .map(|((name, values), _)| Property::new(name, values))
+        .collect();
+    Ok(PointTable {
+        cloud,
+        position_type: PositionType::Scaled {
+            scale: [t.x.scale, t.y.scale, t.z.scale],
+            offset: [t.x.offset, t.y.offset, t.z.offset],
+        },
+        properties,
+        exact_positions,
+    })
+}
+
+/// The cloud of the scaled integer coordinates `xyz`, exactly as
+/// [`PointCloud::from_iter_f64`](bounded_geom::PointCloud::from_iter_f64) builds it from the
+/// scaled coordinates, without its two passes over them and its second allocation: the
+/// bounding box comes from the integer extremes (scaling is monotonic) and the integers turn
+/// into offsets from its centre in place (`[i32; 3]` and `[f32; 3]` have the same layout, so
+/// the collect reuses the allocation). Also a copy of the integers, when some integer does
+/// not come back from its `f32` offset on the same scale and offset (a scale finer than
+/// `f32` resolves over the cloud's extent; see `PointTable::exact_positions`): a parallel
+/// pass before the in-place one checks that, as the integers are gone after it.
+pub(super) fn cloud_of(
+    xyz: Vec<[i32; 3]>,
+    t: &Vector<Transform>,
+) -> Result<ExactCloud, bounded_geom::GeomError> {
+    let axes = [t.x, t.y, t.z];
+    let absolute = move |p: [i32; 3]| std::array::from_fn::<f64, 3, _>(|a| axes[a].direct(p[a]));
+    let (lo, hi) = xyz.par_iter().map(|&p| (p, p)).reduce(
+        || ([i32::MAX; 3], [i32::MIN; 3]),
+        |(l0, h0), (l1, h1)| {
+            (
+                std::array::from_fn(|a| l0[a].min(l1[a])),
+                std::array::from_fn(|a| h0[a].max(h1[a])),
+            )
+        },
+    );
+    let (lo, hi) = (absolute(lo), absolute(hi));
+    let origin: [f64; 3] = std::array::from_fn(|a| 0.5 * (lo[a].min(hi[a]) + lo[a].max(hi[a])));
+    if xyz.is_empty() || !origin.iter().all(|o| o.is_finite()) {
+        // Let the general constructor name the empty cloud or the first non-finite point.
+        let cloud = bounded_geom::PointCloud::from_iter_f64(xyz.len(), |i| absolute(xyz[i]))?;
+        return Ok((cloud, None));
+    }
+    let local = move |p: [i32; 3]| {
+        let p = absolute(p);
+        std::array::from_fn::<f32, 3, _>(|a| (p[a] - origin[a]) as f32)
+    };
+    // What the writer makes of the offset on the same scale and offset.
+    let returns = |p: [i32; 3]| {
+        let q = local(p);
+        (0..3).all(|a| {
+            let steps = (origin[a] + f64::from(q[a]) - axes[a].offset) / axes[a].scale;
+            steps.round() == f64::from(p[a])
+        })
+    };
+    let exact = (!xyz.par_iter().all(|&p| returns(p))).then(|| ExactPositions::Scaled {
+        scale: axes.map(|t| t.scale),
+        offset: axes.map(|t| t.offset),
+        steps: xyz.clone(),
+    });
+    let points = xyz.into_iter().map(local).collect();
+    Ok((bounded_geom::PointCloud::from_local(origin, points)?, exact))
+}
