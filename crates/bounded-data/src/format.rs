@@ -190,6 +190,24 @@ pub fn write_annotated(
     write_view(path, &view)
 }
 
+/// The properties [`write_annotated`] adds, replacing input properties of the same names.
+pub const ANNOTATION: [&str; 7] = [
+    "class",
+    "p_nonedge",
+    "p_sharp",
+    "p_boundary",
+    "red",
+    "green",
+    "blue",
+];
+
+/// Drops the properties of `table` that [`write_annotated`] would replace (see
+/// [`ANNOTATION`]), so that their memory is free while the cloud is labelled; the annotated
+/// output is the same.
+pub fn drop_annotated(table: &mut PointTable) {
+    (table.properties).retain(|p| !ANNOTATION.contains(&p.name.as_str()));
+}
+
 /// Writes a ground-truth labelled cloud: positions and a `class` (uchar) property.
 pub fn write_labelled(path: &Path, labelled: &LabelledCloud) -> Result<(), DataError> {
     if labelled.labels.len() != labelled.cloud.len() {
@@ -260,15 +278,10 @@ fn annotation(classes: &[Class], probabilities: &[[f32; 3]]) -> Vec<Property> {
         });
     let [p0, p1, p2] = p.map(Column::F32);
     let [r, g, b] = rgb.map(Column::U8);
-    vec![
-        Property::new("class", Column::U8(class)),
-        Property::new("p_nonedge", p0),
-        Property::new("p_sharp", p1),
-        Property::new("p_boundary", p2),
-        Property::new("red", r),
-        Property::new("green", g),
-        Property::new("blue", b),
-    ]
+    let columns = [Column::U8(class), p0, p1, p2, r, g, b];
+    (ANNOTATION.into_iter().zip(columns))
+        .map(|(name, values)| Property::new(name, values))
+        .collect()
 }
 
 /// Runs `write` on a temporary file next to `path`, then renames it to `path`; on any
@@ -385,6 +398,31 @@ mod tests {
             let p = ["p_nonedge", "p_sharp", "p_boundary"].map(|name| value(name, i) as f32);
             assert_eq!(p, probabilities[i], "{i}");
         }
+    }
+
+    #[test]
+    fn dropping_the_replaced_properties_first_writes_the_same_output() {
+        let dir = tempfile::tempdir().unwrap();
+        let classes = [Class::Sharp, Class::NonEdge, Class::Boundary];
+        let probabilities = [[0.1, 0.8, 0.1], [0.9, 0.05, 0.05], [0.2, 0.2, 0.6]];
+        let mut t = sample();
+        let before: Vec<String> = t.properties.iter().map(|p| p.name.clone()).collect();
+        let write = |t: &PointTable, name: &str| {
+            let path = dir.path().join(name);
+            write_annotated(&path, t, &classes, &probabilities).unwrap();
+            std::fs::read(path).unwrap()
+        };
+        let whole = write(&t, "whole.ply");
+        drop_annotated(&mut t);
+        let kept: Vec<&str> = t.properties.iter().map(|p| p.name.as_str()).collect();
+        let expected: Vec<&str> = before
+            .iter()
+            .map(String::as_str)
+            .filter(|n| !ANNOTATION.contains(n))
+            .collect();
+        assert!(kept.len() < before.len(), "{before:?}");
+        assert_eq!(kept, expected);
+        assert_eq!(write(&t, "dropped.ply"), whole);
     }
 
     #[test]

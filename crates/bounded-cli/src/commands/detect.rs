@@ -30,7 +30,7 @@ pub fn run(args: &DetectArgs) -> Result<()> {
         format::read(&args.input).map(|table| (table, 0))
     };
     reading.finish_and_clear();
-    let (table, dropped) = read.map_err(|e| match e {
+    let (mut table, dropped) = read.map_err(|e| match e {
         DataError::Geom {
             source: GeomError::NonFinite { .. },
             ..
@@ -41,6 +41,8 @@ pub fn run(args: &DetectArgs) -> Result<()> {
         let points = if dropped == 1 { "point" } else { "points" };
         eprintln!("left out {dropped} {points} with a NaN or infinite coordinate");
     }
+    // The output replaces them: free their memory while the cloud is labelled.
+    format::drop_annotated(&mut table);
     let n = table.len();
     let detection = pipeline::detect(&table.cloud, &classifier, &config, true)
         .with_context(|| args.input.display().to_string())?;
