@@ -145,7 +145,7 @@ pub fn write(path: &Path, table: &PointTable) -> Result<(), DataError> {
 
 /// Writes `view` to `path`, in the format named by its extension.
 pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
-    let format = Format::for_output(path)?;
+    let format = Format::from_path(path)?;
     write_atomic(path, |file| match format {
         Format::E57 => Err(not_written(path)),
         Format::Ply => {
