@@ -94,25 +94,7 @@ impl Layout {
         let (rotation, translation) = match &scan.transform {
             Some(t) => {
                 let q = &t.rotation;
-                let n = (q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z).sqrt();
-                let [w, x, y, z] = [q.w, q.x, q.y, q.z].map(|v| v / n);
-                let rotation = [
-                    [
-                        1.0 - 2.0 * (y * y + z * z),
-                        2.0 * (x * y - w * z),
-                        2.0 * (x * z + w * y),
-                    ],
-                    [
-                        2.0 * (x * y + w * z),
-                        1.0 - 2.0 * (x * x + z * z),
-                        2.0 * (y * z - w * x),
-                    ],
-                    [
-                        2.0 * (x * z - w * y),
-                        2.0 * (y * z + w * x),
-                        1.0 - 2.0 * (x * x + y * y),
-                    ],
-                ];
+                let rotation = bounded_geom::rotation_of_quaternion([q.w, q.x, q.y, q.z]);
                 let shift = &t.translation;
                 (rotation, [shift.x, shift.y, shift.z])
             }

@@ -329,35 +329,9 @@ struct Pose {
 
 impl Pose {
     fn random(rng: &mut impl Rng) -> Self {
-        // A uniformly random rotation from a normalised Gaussian quaternion.
-        let q = {
-            let v: [f64; 4] = [(); 4].map(|()| rng.sample(rand_distr::StandardNormal));
-            let n = v
-                .iter()
-                .map(|x| x * x)
-                .sum::<f64>()
-                .sqrt()
-                .max(f64::MIN_POSITIVE);
-            v.map(|x| x / n)
-        };
-        let [w, x, y, z] = q;
-        let rotation = [
-            [
-                1.0 - 2.0 * (y * y + z * z),
-                2.0 * (x * y - w * z),
-                2.0 * (x * z + w * y),
-            ],
-            [
-                2.0 * (x * y + w * z),
-                1.0 - 2.0 * (x * x + z * z),
-                2.0 * (y * z - w * x),
-            ],
-            [
-                2.0 * (x * z - w * y),
-                2.0 * (y * z + w * x),
-                1.0 - 2.0 * (x * x + y * y),
-            ],
-        ];
+        // A uniformly random rotation from a Gaussian quaternion.
+        let q: [f64; 4] = [(); 4].map(|()| rng.sample(rand_distr::StandardNormal));
+        let rotation = bounded_geom::rotation_of_quaternion(q);
         let size = 10f64.powf(rng.random_range(-1.0..1.0));
         let stretch: V3 = [(); 3].map(|()| size * 1.25f64.powf(rng.random_range(-1.0..1.0)));
         let matrix = rotation.map(|row| [0, 1, 2].map(|c| row[c] * stretch[c]));

@@ -39,6 +39,7 @@ mod knn;
 mod morton;
 #[cfg(target_arch = "x86_64")]
 mod network;
+mod rotation;
 mod select;
 mod smallest;
 
@@ -49,6 +50,7 @@ pub use eigen::{Eigen3, Sym3, cross, dot, eigenvalues_batch};
 pub use error::GeomError;
 pub use knn::{KnnIndex, NeighbourChunk};
 pub use morton::morton_order;
+pub use rotation::rotation_of_quaternion;
 pub use smallest::SmallestFirst;
 
 /// A 64-bit linear congruential stream for the tests.
