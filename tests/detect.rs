@@ -25,6 +25,14 @@ fn detect_in_every_format_keeps_points_and_properties_and_finds_creases() {
             stderr(&run).contains("sharp edge"),
             "{ext}: summary missing"
         );
+        if cfg!(target_os = "linux") {
+            let err = stderr(&run);
+            let mib: f64 = (err.split("peak memory ").nth(1))
+                .and_then(|rest| rest.split(" MiB").next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or_else(|| panic!("{ext}: no peak memory in {err}"));
+            assert!((1.0..4096.0).contains(&mib), "{ext}: {err}");
+        }
 
         let back = format::read(&output).unwrap();
         assert_eq!(back.len(), n, "{ext}: point count");

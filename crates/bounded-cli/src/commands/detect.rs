@@ -1,6 +1,6 @@
 //! `bounded detect`: label every point of a cloud file.
 
-use super::{rate, sources};
+use super::{peak_memory, rate, sources};
 use crate::cli::DetectArgs;
 use crate::{pipeline, progress};
 use anyhow::{Context, Result, bail};
@@ -59,9 +59,10 @@ pub fn run(args: &DetectArgs) -> Result<()> {
 
     let [non_edge, sharp, boundary] = detection.class_counts();
     let seconds = start.elapsed().as_secs_f64();
+    let memory = peak_memory().map_or(String::new(), |m| format!(", peak memory {m}"));
     eprintln!(
         "{n} points: {sharp} sharp edge, {boundary} boundary, {non_edge} non-edge; \
-         detection {:.2} s ({}), total {seconds:.2} s; wrote {}",
+         detection {:.2} s ({}), total {seconds:.2} s{memory}; wrote {}",
         detection.elapsed.as_secs_f64(),
         rate(n, detection.elapsed.as_secs_f64()),
         args.output.display()

@@ -26,6 +26,15 @@ pub fn run(command: Command) -> Result<()> {
 }
 
 /// Points per second, for summaries.
+/// The process' peak resident memory so far (VmHWM of /proc/self/status) in MiB, where the
+/// platform reports it.
+fn peak_memory() -> Option<String> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(format!("{:.0} MiB", kib / 1024.0))
+}
+
 fn rate(points: usize, seconds: f64) -> String {
     let per_second = points as f64 / seconds.max(1e-9);
     if per_second >= 1e6 {
