@@ -4,9 +4,11 @@
 //! A file holds one or more scans, each in its own frame with a pose. Reading converts
 //! spherical coordinates to Cartesian where a scan stores only those, applies each scan's
 //! pose, and concatenates the scans in file order as one cloud of `f64` positions. Kept per
-//! point, as the file's values, when any scan has them: `intensity` and `red`, `green`,
-//! `blue` (float; NaN where a scan or point has none), and `scan` (uint, the scan's 0-based
-//! index) when the file holds several.
+//! point, as the file's values, when any scan has them: `intensity` (float; NaN where a scan
+//! or point has none), `red`, `green`, `blue` (uchar or ushort when every scan's colour
+//! records are integers within that range, as scanners write them, else float; 0 or NaN
+//! where a scan or point has none), and `scan` (uint, the scan's 0-based index) when the file
+//! holds several.
 //!
 //! A point the file marks as having no position (scanners store their no-return pixels so, or
 //! a direction without a range) gets NaN coordinates: an error naming it, unless read with
@@ -14,8 +16,8 @@
 //! the NaN points of organised PCL clouds.
 
 use crate::DataError;
-use crate::table::{Column, Property};
-use e57::{E57Reader, PointCloud, Record, RecordName, RecordValue};
+use crate::table::{Column, Property, ScalarType};
+use e57::{E57Reader, PointCloud, Record, RecordDataType, RecordName, RecordValue};
 use std::io::{Read, Seek};
 use std::path::Path;
 
@@ -46,10 +48,8 @@ pub(crate) fn read_properties<R: Read + Seek>(
             .iter()
             .any(|s| s.has_intensity())
             .then(|| Vec::with_capacity(reserve)),
-        colour: scans
-            .iter()
-            .any(|s| s.has_color())
-            .then(|| std::array::from_fn(|_| Vec::with_capacity(reserve))),
+        colour: colour_type(&scans)
+            .map(|ty| std::array::from_fn(|_| Column::with_capacity(ty, reserve))),
         scan: (scans.len() > 1).then(|| Vec::with_capacity(reserve)),
     };
     for (index, scan) in scans.iter().enumerate() {
@@ -61,6 +61,26 @@ pub(crate) fn read_properties<R: Read + Seek>(
         }
     }
     Ok(columns.into_properties())
+}
+
+/// The column type for the colours of `scans`, if any has colours: the smallest unsigned
+/// integer type that holds every colour record's range, or float.
+fn colour_type(scans: &[PointCloud]) -> Option<ScalarType> {
+    use RecordName::{ColorBlue, ColorGreen, ColorRed};
+    let widest = (scans.iter().flat_map(|s| &s.prototype))
+        .filter(|r| matches!(r.name, ColorRed | ColorGreen | ColorBlue))
+        .map(|r| match r.data_type {
+            RecordDataType::Integer { min, max } if min >= 0 => max,
+            _ => i64::MAX,
+        })
+        .max()?;
+    Some(if widest <= 0xff {
+        ScalarType::U8
+    } else if widest <= 0xffff {
+        ScalarType::U16
+    } else {
+        ScalarType::F32
+    })
 }
 
 /// Where a scan's values are in its records, and its pose.
@@ -84,7 +104,7 @@ struct Layout {
 struct Point {
     xyz: [f64; 3],
     intensity: f32,
-    colour: [f32; 3],
+    colour: [f64; 3],
 }
 
 impl Layout {
@@ -152,10 +172,8 @@ impl Layout {
             _ => f32::NAN,
         };
         let colour = match self.colour {
-            Some([r, g, b]) if valid(self.colour_invalid)? => {
-                [value(r)? as f32, value(g)? as f32, value(b)? as f32]
-            }
-            _ => [f32::NAN; 3],
+            Some([r, g, b]) if valid(self.colour_invalid)? => [value(r)?, value(g)?, value(b)?],
+            _ => [f64::NAN; 3],
         };
         Ok(Point {
             xyz,
@@ -169,7 +187,7 @@ impl Layout {
 struct Columns {
     xyz: [Vec<f64>; 3],
     intensity: Option<Vec<f32>>,
-    colour: Option<[Vec<f32>; 3]>,
+    colour: Option<[Column; 3]>,
     scan: Option<Vec<u32>>,
 }
 
@@ -183,7 +201,7 @@ impl Columns {
         }
         if let Some(columns) = &mut self.colour {
             for (column, v) in columns.iter_mut().zip(point.colour) {
-                column.push(v);
+                column.push_f64(v);
             }
         }
         if let Some(column) = &mut self.scan {
@@ -202,9 +220,9 @@ impl Columns {
             properties.push(Property::new("intensity", Column::F32(intensity)));
         }
         if let Some([r, g, b]) = self.colour {
-            properties.push(Property::new("red", Column::F32(r)));
-            properties.push(Property::new("green", Column::F32(g)));
-            properties.push(Property::new("blue", Column::F32(b)));
+            properties.push(Property::new("red", r));
+            properties.push(Property::new("green", g));
+            properties.push(Property::new("blue", b));
         }
         if let Some(scan) = self.scan {
             properties.push(Property::new("scan", Column::U32(scan)));
@@ -324,20 +342,49 @@ mod tests {
         };
         assert_eq!(intensity[..3], [0.5, 100.0, 7.0]);
         assert!(intensity[3..].iter().all(|v| v.is_nan()));
-        let channel = |name| match table.property(name) {
-            Some(Column::F32(v)) => v.clone(),
-            other => panic!("{name}: {other:?}"),
-        };
-        let want = [[255.0, 0.0, 0.0], [0.0, 128.0, 0.0], [0.0, 0.0, 1.0]];
-        for (c, name) in ["red", "green", "blue"].into_iter().enumerate() {
-            let got = channel(name);
-            assert_eq!(got[..3], want[c], "{name}");
-            assert!(got[3..].iter().all(|v| v.is_nan()), "{name}");
-        }
+        let rgb = ["red", "green", "blue"].map(|c| table.property(c).cloned());
+        assert_eq!(
+            rgb,
+            [
+                Some(Column::U8(vec![255, 0, 0, 0, 0])),
+                Some(Column::U8(vec![0, 128, 0, 0, 0])),
+                Some(Column::U8(vec![0, 0, 1, 0, 0])),
+            ]
+        );
         assert_eq!(
             table.property("scan"),
             Some(&Column::U32(vec![0, 0, 0, 1, 1]))
         );
+    }
+
+    #[test]
+    fn colours_take_the_smallest_type_that_holds_every_scan_range() {
+        let scan = |types: &[RecordDataType]| {
+            let mut scan = PointCloud::default();
+            let names = [
+                RecordName::ColorRed,
+                RecordName::ColorGreen,
+                RecordName::ColorBlue,
+            ];
+            scan.prototype = (names.into_iter().zip(types.iter().cycle().cloned()))
+                .map(|(name, data_type)| record(name, data_type))
+                .collect();
+            scan
+        };
+        let wide = RecordDataType::Integer { min: 0, max: 4095 };
+        let signed = RecordDataType::Integer { min: -1, max: 255 };
+        assert_eq!(
+            colour_type(&[scan(&[RecordDataType::U8])]),
+            Some(ScalarType::U8)
+        );
+        let u8_and_12_bit = [scan(&[RecordDataType::U8]), scan(&[wide])];
+        assert_eq!(colour_type(&u8_and_12_bit), Some(ScalarType::U16));
+        assert_eq!(colour_type(&[scan(&[signed])]), Some(ScalarType::F32));
+        assert_eq!(
+            colour_type(&[scan(&[RecordDataType::F32])]),
+            Some(ScalarType::F32)
+        );
+        assert_eq!(colour_type(&[PointCloud::default()]), None);
     }
 
     #[test]

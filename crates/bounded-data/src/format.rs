@@ -54,10 +54,10 @@ pub enum Format {
     /// Text, one point per line (`.xyz`, `.txt` space-separated, `.csv` comma-separated).
     Xyz(crate::xyz::Separator),
     /// ASTM E57 (`.e57`), read only: the scans in the file's frame (poses applied, spherical
-    /// coordinates converted), joined in file order, with `intensity`, `red`, `green`, `blue`
-    /// (the file's values, NaN where absent) and `scan` (the index, when there are several).
-    /// Points the file marks as having no position come as NaN coordinates, which
-    /// [`read_finite`] leaves out.
+    /// coordinates converted), joined in file order, with `intensity` (float, NaN where
+    /// absent), `red`, `green`, `blue` (the file's values, as integers when its colour
+    /// records are) and `scan` (the index, when there are several). Points the file marks as
+    /// having no position come as NaN coordinates, which [`read_finite`] leaves out.
     E57,
 }
 

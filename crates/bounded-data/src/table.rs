@@ -250,6 +250,11 @@ impl Column {
         with_values!(self, v => v[i].to_f64())
     }
 
+    /// Appends `value` converted with Rust `as` semantics (NaN becomes 0 in integer columns).
+    pub(crate) fn push_f64(&mut self, value: f64) {
+        with_values!(self, v => v.push(Scalar::from_f64(value)))
+    }
+
     /// Parses one text token and appends it; the error says why the token is not a value
     /// of this type.
     pub(crate) fn push_token(&mut self, token: &str) -> Result<(), String> {
