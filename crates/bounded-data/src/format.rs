@@ -185,7 +185,7 @@ pub fn write_annotated(
     let added = annotation(classes, probabilities);
     let mut view = table.view();
     view.properties
-        .retain(|p| !added.iter().any(|a| a.name == p.name));
+        .retain(|p| !ANNOTATION.contains(&p.name.as_str()));
     view.properties.extend(&added);
     write_view(path, &view)
 }

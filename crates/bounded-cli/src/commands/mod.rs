@@ -25,7 +25,6 @@ pub fn run(command: Command) -> Result<()> {
     }
 }
 
-/// Points per second, for summaries.
 /// The process' peak resident memory so far (VmHWM of /proc/self/status) in MiB, where the
 /// platform reports it.
 fn peak_memory() -> Option<String> {
@@ -35,6 +34,7 @@ fn peak_memory() -> Option<String> {
     Some(format!("{:.0} MiB", kib / 1024.0))
 }
 
+/// Points per second, for summaries.
 fn rate(points: usize, seconds: f64) -> String {
     let per_second = points as f64 / seconds.max(1e-9);
     if per_second >= 1e6 {
