@@ -15,7 +15,7 @@ fn detect_in_every_format_keeps_points_and_properties_and_finds_creases() {
     let intensity: Vec<u16> = (0..n).map(|i| (i % 1000) as u16).collect();
     table.set_property(Property::new("intensity", Column::U16(intensity)));
     let dir = tempfile::tempdir().unwrap();
-    for ext in ["ply", "pcd", "xyz", "txt", "csv", "las", "laz"] {
+    for ext in ["ply", "pcd", "xyz", "txt", "csv", "las", "laz", "e57"] {
         let input = dir.path().join(format!("in.{ext}"));
         let output = dir.path().join(format!("out.{ext}"));
         format::write(&input, &table).unwrap();

@@ -49,7 +49,8 @@ pub enum Command {
 pub struct DetectArgs {
     /// Input cloud (.ply .pcd .xyz .txt .csv .las .laz .e57).
     pub input: PathBuf,
-    /// Output cloud; the format follows the extension.
+    /// Output cloud (.ply .pcd .xyz .txt .csv .las .laz .e57); the format follows the
+    /// extension.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Model file (default: the embedded model).

@@ -53,11 +53,13 @@ pub enum Format {
     },
     /// Text, one point per line (`.xyz`, `.txt` space-separated, `.csv` comma-separated).
     Xyz(crate::xyz::Separator),
-    /// ASTM E57 (`.e57`), read only: the scans in the file's frame (poses applied, spherical
+    /// ASTM E57 (`.e57`). Read: the scans in the file's frame (poses applied, spherical
     /// coordinates converted), joined in file order, with `intensity` (float, NaN where
     /// absent), `red`, `green`, `blue` (the file's values, as integers when its colour
-    /// records are) and `scan` (the index, when there are several). Points the file marks as
-    /// having no position come as NaN coordinates, which [`read_finite`] leaves out.
+    /// records are), `scan` (the index, when there are several) and every extension
+    /// attribute. Points the file marks as having no position come as NaN coordinates, which
+    /// [`read_finite`] leaves out. Written as one scan: intensity and colours in the standard
+    /// fields, the other properties as attributes of a `bounded` extension.
     E57,
 }
 
@@ -80,24 +82,6 @@ impl Format {
                 path: path.to_path_buf(),
             }),
         }
-    }
-
-    /// The format to write `path` in: [`Format::from_path`], except that E57, which is only
-    /// read, is an error.
-    pub fn for_output(path: &Path) -> Result<Format, DataError> {
-        match Format::from_path(path)? {
-            Format::E57 => Err(not_written(path)),
-            format => Ok(format),
-        }
-    }
-}
-
-/// The error for writing a format that is only read.
-fn not_written(path: &Path) -> DataError {
-    DataError::InvalidOutput {
-        path: path.to_path_buf(),
-        what: "E57 is read but not written; write .ply or .las (or .laz .pcd .xyz .txt .csv)"
-            .into(),
     }
 }
 
@@ -147,7 +131,8 @@ pub fn write(path: &Path, table: &PointTable) -> Result<(), DataError> {
 pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
     let format = Format::from_path(path)?;
     write_atomic(path, |file| match format {
-        Format::E57 => Err(not_written(path)),
+        // Unbuffered: the E57 writer writes whole 1 KiB pages and seeks back to finish.
+        Format::E57 => crate::e57::write_to(file, view, path),
         Format::Ply => {
             crate::ply::write_to(file, view, crate::ply::Encoding::BinaryLittleEndian, path)
         }
@@ -431,7 +416,7 @@ mod tests {
         let t = sample();
         let classes = [Class::Sharp, Class::NonEdge, Class::Boundary];
         let probabilities = [[0.1, 0.8, 0.1], [0.9, 0.05, 0.05], [0.2, 0.2, 0.6]];
-        for ext in ["ply", "pcd", "xyz", "txt", "csv", "las", "laz"] {
+        for ext in ["ply", "pcd", "xyz", "txt", "csv", "las", "laz", "e57"] {
             let path = dir.path().join(format!("out.{ext}"));
             write_annotated(&path, &t, &classes, &probabilities).unwrap();
             let back = read(&path).unwrap();
@@ -470,7 +455,7 @@ mod tests {
                 assert_eq!(labels.unwrap().labels, classes, "{ext}");
             }
         }
-        assert_eq!(entries(dir.path()).len(), 7, "no temporary files left");
+        assert_eq!(entries(dir.path()).len(), 8, "no temporary files left");
     }
 
     /// Every position as the writers see it.
@@ -552,7 +537,7 @@ mod tests {
                     "{name}: {p:?} {q:?}"
                 );
             }
-            for ext in ["ply", "pcd", "xyz", "las"] {
+            for ext in ["ply", "pcd", "xyz", "las", "e57"] {
                 if ext == "las" && !name.ends_with("las") {
                     continue; // LAS output quantises other inputs onto its own grid.
                 }
@@ -689,7 +674,7 @@ mod tests {
         let mut bad = t.clone();
         bad.properties
             .push(Property::new("short", Column::U8(vec![1])));
-        for ext in ["ply", "pcd", "xyz", "las"] {
+        for ext in ["ply", "pcd", "xyz", "las", "e57"] {
             let path = dir.path().join(format!("out.{ext}"));
             let e = write(&path, &bad).unwrap_err().to_string();
             assert!(e.contains("'short' has 1 values for 3 points"), "{e}");

@@ -1,6 +1,6 @@
 //! Point-cloud formats, labelled datasets and the synthetic training-set generator for BoundED.
 //!
-//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, and E57 (read only).
+//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, E57.
 
 mod e57;
 mod error;

@@ -12,7 +12,7 @@ use std::time::Instant;
 pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on an unknown output format before any work is done.
-    Format::for_output(&args.output)?;
+    Format::from_path(&args.output)?;
     let parent = match args.output.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => std::path::Path::new("."),
