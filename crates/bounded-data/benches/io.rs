@@ -1,4 +1,4 @@
-//! Read and write throughput of binary PLY, LAS and LAZ on an annotated cloud.
+//! Read and write throughput of binary PLY, LAS, LAZ and E57 on an annotated cloud.
 //!
 //! `BOUNDED_IO_POINTS` sets the cloud size (default 10,000,000). Each point has float
 //! x, y, z plus the annotation properties (class, three probabilities, colour): 28 bytes per
@@ -42,7 +42,7 @@ fn io(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(3))
         .throughput(Throughput::Elements(n as u64));
-    for ext in ["ply", "las", "laz"] {
+    for ext in ["ply", "las", "laz", "e57"] {
         let path = dir.path().join(format!("bench.{ext}"));
         let write = || write_annotated(&path, &table, &classes, &probabilities).expect("write");
         // A new file, as `bounded detect -o` usually writes: the old one is removed untimed.
