@@ -24,7 +24,7 @@ pub enum DataError {
     },
     /// The file extension names no supported format.
     #[error(
-        "{path}: unknown point-cloud format (supported: .ply .pcd .xyz .txt .csv .las .laz, and .e57 to read)"
+        "{path}: unknown point-cloud format (supported: .ply .pcd .xyz .txt .csv .las .laz .e57)"
     )]
     UnknownFormat {
         /// The file.
