@@ -110,3 +110,122 @@ fn positions(table: &PointTable) -> Vec<[f64; 3]> {
             .collect(),
     }
 }
+
+/// The classes written to `path` (the `class` property).
+fn classes(path: &std::path::Path) -> Vec<f64> {
+    let table = format::read(path).unwrap();
+    let class = table.property("class").expect("class column");
+    (0..table.len()).map(|i| class.get_f64(i)).collect()
+}
+
+#[test]
+fn tiles_are_labelled_as_one_cloud_without_seams() {
+    // A box cut in two across its faces: alone, each half ends at the cut, which is then a
+    // boundary; together the cut is flat surface.
+    let labelled = box_cloud(8000, 11);
+    let all: Vec<[f64; 3]> = (0..labelled.cloud.len())
+        .map(|i| labelled.cloud.position_f64(i))
+        .collect();
+    let cut = 0.5
+        * (all.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min)
+            + all.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max));
+    let (left, right): (Vec<_>, Vec<_>) = all.iter().partition(|p| p[0] < cut);
+    let text = |points: &[&[f64; 3]]| -> String {
+        (points.iter())
+            .map(|p| format!("{} {} {}\n", p[0], p[1], p[2]))
+            .collect()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    std::fs::write(path("left.xyz"), text(&left)).unwrap();
+    std::fs::write(path("right.xyz"), text(&right)).unwrap();
+    let both: Vec<&[f64; 3]> = left.iter().chain(&right).copied().collect();
+    std::fs::write(path("whole.xyz"), text(&both)).unwrap();
+
+    let tiles = [path("left.xyz"), path("right.xyz")];
+    let run = bounded_paths(&[
+        &"detect",
+        &tiles[0],
+        &tiles[1],
+        &"-o",
+        &path("out"),
+        &"--format",
+        &"ply",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(
+        stderr(&run).contains("wrote 2 files to"),
+        "{}",
+        stderr(&run)
+    );
+    let joint: Vec<f64> = [path("out/left.ply"), path("out/right.ply")]
+        .iter()
+        .flat_map(|p| classes(p))
+        .collect();
+    let run = bounded_paths(&[&"detect", &path("whole.xyz"), &"-o", &path("whole.ply")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let whole = classes(&path("whole.ply"));
+    let same = joint.iter().zip(&whole).filter(|(a, b)| a == b).count();
+    assert!(
+        same * 1000 >= whole.len() * 999,
+        "{same} of {} alike",
+        whole.len()
+    );
+
+    // Labelled apart, the points at the cut become boundary; together they are not.
+    let mut apart = Vec::new();
+    for tile in &tiles {
+        let out = tile.with_extension("ply");
+        let run = bounded_paths(&[&"detect", tile, &"-o", &out]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        apart.extend(classes(&out));
+    }
+    let spacing = 0.02 * (cut - all.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min));
+    let at_cut = |labels: &[f64]| {
+        (both.iter().zip(labels))
+            .filter(|(p, c)| (p[0] - cut).abs() < spacing && **c == 2.0)
+            .count()
+    };
+    let (apart, joint) = (at_cut(&apart), at_cut(&joint));
+    assert!(
+        apart > 20 && joint * 10 < apart,
+        "boundary at the cut: apart {apart}, joint {joint}"
+    );
+}
+
+#[test]
+fn several_inputs_refuse_clashing_or_replacing_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = PointTable::new(box_cloud(600, 2).cloud);
+    for sub in ["a", "b"] {
+        std::fs::create_dir(dir.path().join(sub)).unwrap();
+        format::write(&dir.path().join(sub).join("t.ply"), &table).unwrap();
+    }
+    let (a, b) = (dir.path().join("a/t.ply"), dir.path().join("b/t.ply"));
+    let fails = |args: &[&dyn AsRef<std::ffi::OsStr>], expected: &str| {
+        let run = bounded_paths(args);
+        let err = stderr(&run);
+        assert!(!run.status.success() && err.contains(expected), "{err}");
+    };
+    fails(
+        &[&"detect", &a, &b, &"-o", &dir.path().join("out")],
+        "rename one",
+    );
+    fails(
+        &[&"detect", &a, &b, &"-o", &dir.path().join("a")],
+        "would replace it",
+    );
+    fails(
+        &[
+            &"detect",
+            &a,
+            &"-o",
+            &dir.path().join("o.ply"),
+            &"--format",
+            &"las",
+        ],
+        "--format",
+    );
+    fails(&[&"detect", &a, &b, &"-o", &a], "this is a file");
+    assert!(!dir.path().join("out").exists(), "nothing created");
+}

@@ -47,12 +47,20 @@ pub enum Command {
 /// Arguments of `detect`.
 #[derive(Debug, Args)]
 pub struct DetectArgs {
-    /// Input cloud (.ply .pcd .xyz .txt .csv .las .laz .e57).
-    pub input: PathBuf,
-    /// Output cloud (.ply .pcd .xyz .txt .csv .las .laz .e57); the format follows the
-    /// extension.
+    /// Input clouds (.ply .pcd .xyz .txt .csv .las .laz .e57). Several (the tiles of a
+    /// survey, say) are labelled as one cloud, so neighbourhoods reach across their seams,
+    /// and written one output each.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Output cloud (.ply .pcd .xyz .txt .csv .las .laz .e57; the format follows the
+    /// extension), or a directory (created if missing) for several inputs, where each is
+    /// written under its own file name.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// With a directory output: write every cloud in this format (an extension such as
+    /// las or ply) instead of its input's.
+    #[arg(long, value_name = "EXT")]
+    pub format: Option<String>,
     /// Model file (default: the embedded model).
     #[arg(long)]
     pub model: Option<PathBuf>,

@@ -1,4 +1,4 @@
-//! `bounded detect`: label every point of a cloud file.
+//! `bounded detect`: label every point of a cloud file, or of several files as one cloud.
 
 use super::{peak_memory, rate, sources};
 use crate::cli::DetectArgs;
@@ -6,31 +6,86 @@ use crate::{pipeline, progress};
 use anyhow::{Context, Result, bail};
 use bounded_data::DataError;
 use bounded_data::format::{self, Format};
-use bounded_geom::GeomError;
+use bounded_data::table::PointTable;
+use bounded_geom::{GeomError, PointCloud};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
-    // Fail on an unknown output format before any work is done.
-    Format::from_path(&args.output)?;
-    let parent = match args.output.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => std::path::Path::new("."),
-    };
-    if !parent.is_dir() {
-        bail!("{}: output directory does not exist", parent.display());
-    }
+    // Fail on unknown formats and unusable outputs before any work is done.
+    let outputs = output_paths(args)?;
     let classifier = sources::model(args.model.as_deref())?;
     let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
 
+    let mut tables = Vec::with_capacity(args.inputs.len());
+    for input in &args.inputs {
+        let mut table = read(input, args.drop_non_finite)?;
+        // The output replaces them: free their memory while the cloud is labelled.
+        format::drop_annotated(&mut table);
+        tables.push(table);
+    }
+    let n: usize = tables.iter().map(PointTable::len).sum();
+    let detection = match tables.as_slice() {
+        [table] => pipeline::detect(&table.cloud, &classifier, &config, true),
+        _ => pipeline::detect(&joined(&tables)?, &classifier, &config, true),
+    }
+    .with_context(|| {
+        let names: Vec<_> = args
+            .inputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
+        names.join(", ")
+    })?;
+
+    let writing = progress::spinner("write");
+    let mut written = Ok(());
+    let mut first = 0;
+    for (table, output) in tables.iter().zip(&outputs) {
+        let range = first..first + table.len();
+        first = range.end;
+        let (classes, probabilities) = (&detection.classes, &detection.probabilities);
+        written = format::write_annotated(
+            output,
+            table,
+            &classes[range.clone()],
+            &probabilities[range],
+        );
+        if written.is_err() {
+            break;
+        }
+    }
+    writing.finish_and_clear();
+    written?;
+
+    let [non_edge, sharp, boundary] = detection.class_counts();
+    let seconds = start.elapsed().as_secs_f64();
+    let memory = peak_memory().map_or(String::new(), |m| format!(", peak memory {m}"));
+    let wrote = match outputs.as_slice() {
+        [one] => one.display().to_string(),
+        all => format!("{} files to {}", all.len(), args.output.display()),
+    };
+    eprintln!(
+        "{n} points: {sharp} sharp edge, {boundary} boundary, {non_edge} non-edge; \
+         detection {:.2} s ({}), total {seconds:.2} s{memory}; wrote {wrote}",
+        detection.elapsed.as_secs_f64(),
+        rate(n, detection.elapsed.as_secs_f64()),
+    );
+    Ok(())
+}
+
+/// Reads `input` with every property; with `drop_non_finite`, leaves out (and reports) the
+/// points with a non-finite coordinate.
+fn read(input: &Path, drop_non_finite: bool) -> Result<PointTable> {
     let reading = progress::spinner("read");
-    let read = if args.drop_non_finite {
-        format::read_finite(&args.input)
+    let read = if drop_non_finite {
+        format::read_finite(input)
     } else {
-        format::read(&args.input).map(|table| (table, 0))
+        format::read(input).map(|table| (table, 0))
     };
     reading.finish_and_clear();
-    let (mut table, dropped) = read.map_err(|e| match e {
+    let (table, dropped) = read.map_err(|e| match e {
         DataError::Geom {
             source: GeomError::NonFinite { .. },
             ..
@@ -39,33 +94,90 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     })?;
     if dropped > 0 {
         let points = if dropped == 1 { "point" } else { "points" };
-        eprintln!("left out {dropped} {points} with a NaN or infinite coordinate");
+        eprintln!(
+            "{}: left out {dropped} {points} with a NaN or infinite coordinate",
+            input.display()
+        );
     }
-    // The output replaces them: free their memory while the cloud is labelled.
-    format::drop_annotated(&mut table);
-    let n = table.len();
-    let detection = pipeline::detect(&table.cloud, &classifier, &config, true)
-        .with_context(|| args.input.display().to_string())?;
+    Ok(table)
+}
 
-    let writing = progress::spinner("write");
-    let written = format::write_annotated(
-        &args.output,
-        &table,
-        &detection.classes,
-        &detection.probabilities,
-    );
-    writing.finish_and_clear();
-    written?;
+/// The clouds of `tables` as one, in order (for features only: each output keeps its own
+/// table's positions).
+fn joined(tables: &[PointTable]) -> Result<PointCloud> {
+    let starts: Vec<usize> = (tables.iter())
+        .scan(0, |next, t| {
+            let first = *next;
+            *next += t.len();
+            Some(first)
+        })
+        .collect();
+    let n = tables.iter().map(PointTable::len).sum();
+    Ok(PointCloud::from_iter_f64(n, |i| {
+        let k = starts.partition_point(|&s| s <= i) - 1;
+        tables[k].cloud.position_f64(i - starts[k])
+    })?)
+}
 
-    let [non_edge, sharp, boundary] = detection.class_counts();
-    let seconds = start.elapsed().as_secs_f64();
-    let memory = peak_memory().map_or(String::new(), |m| format!(", peak memory {m}"));
-    eprintln!(
-        "{n} points: {sharp} sharp edge, {boundary} boundary, {non_edge} non-edge; \
-         detection {:.2} s ({}), total {seconds:.2} s{memory}; wrote {}",
-        detection.elapsed.as_secs_f64(),
-        rate(n, detection.elapsed.as_secs_f64()),
-        args.output.display()
-    );
-    Ok(())
+/// Where each input's result goes: `--output` for one input, unless it is a directory;
+/// else a file of the input's name in that directory, which is created. Checked before any
+/// work: known formats, an existing parent, no two inputs to one file, no input replaced by
+/// another's result.
+fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
+    let output = &args.output;
+    if args.inputs.len() == 1 && !output.is_dir() {
+        if args.format.is_some() {
+            bail!(
+                "--format is for a directory output; {} names a file, whose extension gives the format",
+                output.display()
+            );
+        }
+        Format::from_path(output)?;
+        let parent = match output.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if !parent.is_dir() {
+            bail!("{}: output directory does not exist", parent.display());
+        }
+        return Ok(vec![output.clone()]);
+    }
+    if output.exists() && !output.is_dir() {
+        bail!(
+            "{}: several inputs need a directory output, and this is a file",
+            output.display()
+        );
+    }
+    let directory = output.canonicalize().ok();
+    let mut outputs: Vec<PathBuf> = Vec::with_capacity(args.inputs.len());
+    for input in &args.inputs {
+        let name =
+            (input.file_name()).with_context(|| format!("{}: no file name", input.display()))?;
+        let mut path = output.join(name);
+        if let Some(ext) = &args.format {
+            path.set_extension(ext);
+        }
+        Format::from_path(&path)?;
+        if outputs.contains(&path) {
+            bail!(
+                "{}: another input is written to {} too; rename one",
+                input.display(),
+                path.display()
+            );
+        }
+        let replaces_input = directory
+            .as_ref()
+            .zip(path.file_name())
+            .is_some_and(|(d, f)| input.canonicalize().is_ok_and(|i| i == d.join(f)));
+        if replaces_input {
+            bail!(
+                "{}: its result would replace it; choose another output directory or --format",
+                input.display()
+            );
+        }
+        outputs.push(path);
+    }
+    std::fs::create_dir_all(output)
+        .with_context(|| format!("cannot create {}", output.display()))?;
+    Ok(outputs)
 }
