@@ -58,8 +58,9 @@ pub enum Format {
     /// absent), `red`, `green`, `blue` (the file's values, as integers when its colour
     /// records are), `scan` (the index, when there are several) and every extension
     /// attribute. Points the file marks as having no position come as NaN coordinates, which
-    /// [`read_finite`] leaves out. Written as one scan: intensity and colours in the standard
-    /// fields, the other properties as attributes of a `bounded` extension.
+    /// [`read_finite`] leaves out. Written as one scan (one per `scan` index, as read):
+    /// intensity and colours in the standard fields, the other properties as attributes of
+    /// a `bounded` extension.
     E57,
 }
 

@@ -15,12 +15,13 @@
 //! [`crate::format::read_finite`], which leaves such points out and counts them, as it does
 //! the NaN points of organised PCL clouds.
 //!
-//! Writing: one scan in the file's frame, positions as the input stored them (single or
-//! double floats, or scaled integers with a LAS input's scale and offset); `intensity` and
-//! `red`, `green`, `blue` in the standard fields (a NaN as the field's invalid flag), so every
-//! E57 viewer shows them; every other property, the detection results among them, as an
-//! attribute of the `bounded` extension, which other readers skip and this one reads back
-//! under its name.
+//! Writing: one scan in the file's frame, or one per index of a `scan` property as reading a
+//! file of several scans gives it (uint, in scan order); positions as the input stored them
+//! (single or double floats, or scaled integers with a LAS input's scale and offset);
+//! `intensity` and `red`, `green`, `blue` in the standard fields (a NaN as the field's
+//! invalid flag), so every E57 viewer shows them; every other property, the detection
+//! results among them, as an attribute of the `bounded` extension, which other readers skip
+//! and this one reads back under its name.
 
 mod read;
 #[cfg(test)]

@@ -197,7 +197,8 @@ fn sample_properties() -> Vec<Property> {
         Property::new("offset", Column::I8(vec![-128, 0, 127])),
         Property::new("count", Column::U16(vec![0, 1, 65535])),
         Property::new("level", Column::I16(vec![-32768, 0, 32767])),
-        Property::new("scan", Column::U32(vec![0, 1, u32::MAX])),
+        // Not in scan order: an attribute like any other.
+        Property::new("scan", Column::U32(vec![2, 1, u32::MAX])),
         Property::new("id", Column::I32(vec![i32::MIN, 0, i32::MAX])),
         Property::new("time", Column::F64(vec![1e300, -2.5, 0.1])),
     ]
@@ -365,4 +366,34 @@ fn a_lone_colour_channel_is_kept_as_an_attribute() {
     let path = dir.path().join("red.e57");
     format::write(&path, &table).unwrap();
     assert_eq!(format::read(&path).unwrap().properties, [red]);
+}
+
+#[test]
+fn scans_read_from_e57_are_written_as_scans() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("two.e57");
+    write_two_scans(&path);
+    let (table, _) = format::read_finite(&path).unwrap();
+    let out = dir.path().join("out.e57");
+    format::write(&out, &table).unwrap();
+    let reader = E57Reader::from_file(&out).unwrap();
+    let sizes: Vec<u64> = reader.pointclouds().iter().map(|s| s.records).collect();
+    assert_eq!(sizes, [3, 2]);
+    let no_scan_attribute = (reader.pointclouds().iter().flat_map(|s| &s.prototype))
+        .all(|r| !matches!(&r.name, RecordName::Unknown { name, .. } if name == "scan"));
+    assert!(no_scan_attribute);
+    let back = format::read(&out).unwrap();
+    assert_eq!(back.properties.len(), table.properties.len());
+    for (got, want) in back.properties.iter().zip(&table.properties) {
+        assert!(
+            got.name == want.name && same_values(&got.values, &want.values),
+            "{got:?}"
+        );
+    }
+    let positions = |t: &PointTable| {
+        (0..t.len())
+            .map(|i| t.view().position(i))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(positions(&back), positions(&table));
 }

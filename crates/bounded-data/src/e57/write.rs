@@ -2,13 +2,14 @@
 
 use super::{EXTENSION, integer_range};
 use crate::DataError;
-use crate::table::{Column, PositionType, ScalarType, TableView};
+use crate::table::{Column, PositionType, Property, ScalarType, TableView};
 use e57::{
     ColorLimits, E57Writer, Extension, IntensityLimits, Record, RecordDataType, RecordName,
     RecordValue,
 };
 use std::fs::File;
 use std::hash::{DefaultHasher, Hash, Hasher};
+use std::ops::Range;
 use std::path::Path;
 
 /// Where the values of one record of the written scan come from.
@@ -23,8 +24,8 @@ enum Source<'a> {
     Invalid(Vec<&'a Column>),
 }
 
-/// Writes `view` to the empty `file` as one scan (see the module documentation); `path`
-/// names it in errors.
+/// Writes `view` to the empty `file` (see the module documentation); `path` names it in
+/// errors.
 pub(crate) fn write_to(
     file: &mut File,
     view: &TableView<'_>,
@@ -43,7 +44,10 @@ pub(crate) fn write_to(
             .find(|p| p.name == name)
             .map(|p| &p.values)
     };
-    let mut standard = Vec::new();
+    let runs = scan_runs(view);
+    let several = runs.len() > 1;
+    // Split into scans, the index is not written again as an attribute.
+    let mut standard = if several { vec!["scan"] } else { Vec::new() };
     let mut intensity_limits = None;
     if let Some(intensity) = property("intensity") {
         standard.push("intensity");
@@ -86,40 +90,47 @@ pub(crate) fn write_to(
     }
 
     let (records, sources): (Vec<Record>, Vec<Source>) = fields.into_iter().unzip();
-    let (file_guid, scan_guid) = guids(view, &records);
-    let mut writer = E57Writer::new(file, &file_guid).map_err(e57)?;
+    let points = points_hash(view, &records);
+    let mut writer = E57Writer::new(file, &guid(&points, 0)).map_err(e57)?;
     if (records.iter()).any(|r| matches!(r.name, RecordName::Unknown { .. })) {
         let extension = Extension::new(EXTENSION.0, EXTENSION.1);
         writer.register_extension(extension).map_err(e57)?;
     }
-    let mut scan = writer
-        .add_pointcloud(&scan_guid, records.clone())
-        .map_err(e57)?;
-    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
-    scan.set_name(stem);
-    scan.set_intensity_limits(intensity_limits);
-    scan.set_color_limits(colour_limits);
-    for i in 0..view.len() {
-        let p = view.position(i);
-        let values = (records.iter().zip(&sources))
-            .map(|(record, source)| {
-                let ty = &record.data_type;
-                match source {
-                    Source::Axis(axis) => encode(p[*axis], ty),
-                    Source::Values(column) => encode(column.get_f64(i), ty),
-                    Source::Valid(column) => {
-                        let v = column.get_f64(i);
-                        encode(if v.is_nan() { 0.0 } else { v }, ty)
+    let stem = path
+        .file_stem()
+        .map_or(String::new(), |s| s.to_string_lossy().into_owned());
+    for (k, run) in runs.into_iter().enumerate() {
+        let mut scan =
+            (writer.add_pointcloud(&guid(&points, k as u64 + 1), records.clone())).map_err(e57)?;
+        scan.set_name(Some(if several {
+            format!("{stem} {k}")
+        } else {
+            stem.clone()
+        }));
+        scan.set_intensity_limits(intensity_limits.clone());
+        scan.set_color_limits(colour_limits.clone());
+        for i in run {
+            let p = view.position(i);
+            let values = (records.iter().zip(&sources))
+                .map(|(record, source)| {
+                    let ty = &record.data_type;
+                    match source {
+                        Source::Axis(axis) => encode(p[*axis], ty),
+                        Source::Values(column) => encode(column.get_f64(i), ty),
+                        Source::Valid(column) => {
+                            let v = column.get_f64(i);
+                            encode(if v.is_nan() { 0.0 } else { v }, ty)
+                        }
+                        Source::Invalid(columns) => RecordValue::Integer(
+                            columns.iter().any(|c| c.get_f64(i).is_nan()).into(),
+                        ),
                     }
-                    Source::Invalid(columns) => {
-                        RecordValue::Integer(columns.iter().any(|c| c.get_f64(i).is_nan()).into())
-                    }
-                }
-            })
-            .collect();
-        scan.add_point(values).map_err(e57)?;
+                })
+                .collect();
+            scan.add_point(values).map_err(e57)?;
+        }
+        scan.finalize().map_err(e57)?;
     }
-    scan.finalize().map_err(e57)?;
     writer.finalize().map_err(e57)
 }
 
@@ -201,9 +212,31 @@ fn encode(v: f64, ty: &RecordDataType) -> RecordValue {
     }
 }
 
-/// GUIDs for the file and its scan, derived from the points (the count and up to 4096
-/// positions as written by `records`), so the same cloud is written to the same bytes.
-fn guids(view: &TableView<'_>, records: &[Record]) -> (String, String) {
+/// The points of each scan: runs of one index when `view` has the scan indices the reader
+/// gives a file of several scans (`scan`, uint, non-decreasing), else all in one.
+fn scan_runs(view: &TableView<'_>) -> Vec<Range<usize>> {
+    let scan = match view.properties.iter().find(|p| p.name == "scan") {
+        Some(Property {
+            values: Column::U32(scan),
+            ..
+        }) if scan.is_sorted() => Some(scan),
+        _ => None,
+    };
+    let mut runs = Vec::new();
+    let mut start = 0;
+    for i in 1..=view.len() {
+        let next_scan = scan.is_some_and(|s| i < s.len() && s[i] != s[start]);
+        if i == view.len() || next_scan {
+            runs.push(start..i);
+            start = i;
+        }
+    }
+    runs
+}
+
+/// A hash of the points (the count and up to 4096 positions as written by `records`), from
+/// which the GUIDs come, so that the same cloud is written to the same bytes.
+fn points_hash(view: &TableView<'_>, records: &[Record]) -> DefaultHasher {
     let mut hasher = DefaultHasher::new();
     view.len().hash(&mut hasher);
     for i in (0..view.len()).step_by((view.len() / 4096).max(1)) {
@@ -216,19 +249,22 @@ fn guids(view: &TableView<'_>, records: &[Record]) -> (String, String) {
             }
         }
     }
-    let guid = |hasher: &mut DefaultHasher, part: u8| {
-        part.hash(hasher);
-        let a = hasher.finish();
-        part.hash(hasher);
-        let b = hasher.finish();
-        format!(
-            "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
-            a >> 32,
-            (a >> 16) & 0xffff,
-            a & 0xffff,
-            b >> 48,
-            b & 0xffff_ffff_ffff
-        )
-    };
-    (guid(&mut hasher, 0), guid(&mut hasher, 1))
+    hasher
+}
+
+/// GUID number `part` (0 the file's, then the scans') from the hash of the points.
+fn guid(points: &DefaultHasher, part: u64) -> String {
+    let mut hasher = points.clone();
+    part.hash(&mut hasher);
+    let a = hasher.finish();
+    part.hash(&mut hasher);
+    let b = hasher.finish();
+    format!(
+        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
+        a >> 32,
+        (a >> 16) & 0xffff,
+        a & 0xffff,
+        b >> 48,
+        b & 0xffff_ffff_ffff
+    )
 }
