@@ -1,4 +1,4 @@
-//! Writing: one scan holding every point and property.
+//! Writing: the points as one scan, or one scan per scan index, with every property.
 
 use super::{EXTENSION, integer_range};
 use crate::DataError;
@@ -24,6 +24,99 @@ enum Source<'a> {
     Invalid(Vec<&'a Column>),
 }
 
+/// The records of the written scans, where their values come from, and the limits viewers
+/// scale the standard fields by.
+struct Layout<'a> {
+    records: Vec<Record>,
+    sources: Vec<Source<'a>>,
+    intensity_limits: Option<IntensityLimits>,
+    colour_limits: Option<ColorLimits>,
+}
+
+impl<'a> Layout<'a> {
+    /// The layout for `view`; with `split`, its `scan` property is not an attribute, since
+    /// the scans hold it.
+    fn of(view: &TableView<'a>, split: bool) -> Self {
+        let mut fields: Vec<(Record, Source)> = (position_records(view).into_iter())
+            .enumerate()
+            .map(|(axis, record)| (record, Source::Axis(axis)))
+            .collect();
+        let property = |name: &str| {
+            (view.properties.iter())
+                .find(|p| p.name == name)
+                .map(|p| &p.values)
+        };
+        let mut standard = if split { vec!["scan"] } else { Vec::new() };
+        let mut intensity_limits = None;
+        if let Some(intensity) = property("intensity") {
+            standard.push("intensity");
+            let name = RecordName::Intensity;
+            fields.push((record(name, intensity), Source::Valid(intensity)));
+            fields.extend(invalid_flag(RecordName::IsIntensityInvalid, &[intensity]));
+            intensity_limits = limits(intensity).map(|(min, max)| IntensityLimits {
+                intensity_min: Some(min),
+                intensity_max: Some(max),
+            });
+        }
+        let mut colour_limits = None;
+        if let (Some(r), Some(g), Some(b)) = (property("red"), property("green"), property("blue"))
+        {
+            standard.extend(["red", "green", "blue"]);
+            use RecordName::{ColorBlue, ColorGreen, ColorRed};
+            for (name, c) in [(ColorRed, r), (ColorGreen, g), (ColorBlue, b)] {
+                fields.push((record(name, c), Source::Valid(c)));
+            }
+            fields.extend(invalid_flag(RecordName::IsColorInvalid, &[r, g, b]));
+            if let (Some(r), Some(g), Some(b)) = (limits(r), limits(g), limits(b)) {
+                colour_limits = Some(ColorLimits {
+                    red_min: Some(r.0),
+                    red_max: Some(r.1),
+                    green_min: Some(g.0),
+                    green_max: Some(g.1),
+                    blue_min: Some(b.0),
+                    blue_max: Some(b.1),
+                });
+            }
+        }
+        let others = (view.properties.iter()).filter(|p| !standard.contains(&p.name.as_str()));
+        for p in others {
+            let name = RecordName::Unknown {
+                namespace: EXTENSION.0.to_string(),
+                name: p.name.clone(),
+            };
+            fields.push((record(name, &p.values), Source::Values(&p.values)));
+        }
+        let (records, sources) = fields.into_iter().unzip();
+        Layout {
+            records,
+            sources,
+            intensity_limits,
+            colour_limits,
+        }
+    }
+
+    /// The record values of point `i` of `view`.
+    fn values(&self, view: &TableView<'_>, i: usize) -> Vec<RecordValue> {
+        let p = view.position(i);
+        (self.records.iter().zip(&self.sources))
+            .map(|(record, source)| {
+                let ty = &record.data_type;
+                match source {
+                    Source::Axis(axis) => encode(p[*axis], ty),
+                    Source::Values(column) => encode(column.get_f64(i), ty),
+                    Source::Valid(column) => {
+                        let v = column.get_f64(i);
+                        encode(if v.is_nan() { 0.0 } else { v }, ty)
+                    }
+                    Source::Invalid(columns) => {
+                        RecordValue::Integer(columns.iter().any(|c| c.get_f64(i).is_nan()).into())
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
 /// Writes `view` to the empty `file` (see the module documentation); `path` names it in
 /// errors.
 pub(crate) fn write_to(
@@ -36,98 +129,29 @@ pub(crate) fn write_to(
         path: path.to_path_buf(),
         what: format!("E57: {e}"),
     };
-    let mut fields: Vec<(Record, Source)> = (position_records(view).into_iter().enumerate())
-        .map(|(axis, record)| (record, Source::Axis(axis)))
-        .collect();
-    let property = |name: &str| {
-        (view.properties.iter())
-            .find(|p| p.name == name)
-            .map(|p| &p.values)
-    };
     let runs = scan_runs(view);
     let several = runs.len() > 1;
-    // Split into scans, the index is not written again as an attribute.
-    let mut standard = if several { vec!["scan"] } else { Vec::new() };
-    let mut intensity_limits = None;
-    if let Some(intensity) = property("intensity") {
-        standard.push("intensity");
-        fields.push((
-            record(RecordName::Intensity, intensity),
-            Source::Valid(intensity),
-        ));
-        fields.extend(invalid_flag(RecordName::IsIntensityInvalid, &[intensity]));
-        intensity_limits = limits(intensity).map(|(min, max)| IntensityLimits {
-            intensity_min: Some(min),
-            intensity_max: Some(max),
-        });
-    }
-    let mut colour_limits = None;
-    if let (Some(r), Some(g), Some(b)) = (property("red"), property("green"), property("blue")) {
-        standard.extend(["red", "green", "blue"]);
-        for (name, c) in [(RecordName::ColorRed, r), (RecordName::ColorGreen, g)] {
-            fields.push((record(name, c), Source::Valid(c)));
-        }
-        fields.push((record(RecordName::ColorBlue, b), Source::Valid(b)));
-        fields.extend(invalid_flag(RecordName::IsColorInvalid, &[r, g, b]));
-        if let (Some(r), Some(g), Some(b)) = (limits(r), limits(g), limits(b)) {
-            colour_limits = Some(ColorLimits {
-                red_min: Some(r.0),
-                red_max: Some(r.1),
-                green_min: Some(g.0),
-                green_max: Some(g.1),
-                blue_min: Some(b.0),
-                blue_max: Some(b.1),
-            });
-        }
-    }
-    let others = (view.properties.iter()).filter(|p| !standard.contains(&p.name.as_str()));
-    for p in others {
-        let name = RecordName::Unknown {
-            namespace: EXTENSION.0.to_string(),
-            name: p.name.clone(),
-        };
-        fields.push((record(name, &p.values), Source::Values(&p.values)));
-    }
-
-    let (records, sources): (Vec<Record>, Vec<Source>) = fields.into_iter().unzip();
-    let points = points_hash(view, &records);
+    let layout = Layout::of(view, several);
+    let points = points_hash(view, &layout.records);
     let mut writer = E57Writer::new(file, &guid(&points, 0)).map_err(e57)?;
-    if (records.iter()).any(|r| matches!(r.name, RecordName::Unknown { .. })) {
+    if (layout.records.iter()).any(|r| matches!(r.name, RecordName::Unknown { .. })) {
         let extension = Extension::new(EXTENSION.0, EXTENSION.1);
         writer.register_extension(extension).map_err(e57)?;
     }
-    let stem = path
-        .file_stem()
-        .map_or(String::new(), |s| s.to_string_lossy().into_owned());
+    let stem = (path.file_stem()).map_or(String::new(), |s| s.to_string_lossy().into_owned());
     for (k, run) in runs.into_iter().enumerate() {
-        let mut scan =
-            (writer.add_pointcloud(&guid(&points, k as u64 + 1), records.clone())).map_err(e57)?;
+        let scan_guid = guid(&points, k as u64 + 1);
+        let records = layout.records.clone();
+        let mut scan = writer.add_pointcloud(&scan_guid, records).map_err(e57)?;
         scan.set_name(Some(if several {
             format!("{stem} {k}")
         } else {
             stem.clone()
         }));
-        scan.set_intensity_limits(intensity_limits.clone());
-        scan.set_color_limits(colour_limits.clone());
+        scan.set_intensity_limits(layout.intensity_limits.clone());
+        scan.set_color_limits(layout.colour_limits.clone());
         for i in run {
-            let p = view.position(i);
-            let values = (records.iter().zip(&sources))
-                .map(|(record, source)| {
-                    let ty = &record.data_type;
-                    match source {
-                        Source::Axis(axis) => encode(p[*axis], ty),
-                        Source::Values(column) => encode(column.get_f64(i), ty),
-                        Source::Valid(column) => {
-                            let v = column.get_f64(i);
-                            encode(if v.is_nan() { 0.0 } else { v }, ty)
-                        }
-                        Source::Invalid(columns) => RecordValue::Integer(
-                            columns.iter().any(|c| c.get_f64(i).is_nan()).into(),
-                        ),
-                    }
-                })
-                .collect();
-            scan.add_point(values).map_err(e57)?;
+            scan.add_point(layout.values(view, i)).map_err(e57)?;
         }
         scan.finalize().map_err(e57)?;
     }
