@@ -194,7 +194,7 @@ fn tiles_are_labelled_as_one_cloud_without_seams() {
 }
 
 #[test]
-fn several_inputs_refuse_clashing_or_replacing_outputs() {
+fn directory_outputs_refuse_clashing_or_replacing_outputs() {
     let dir = tempfile::tempdir().unwrap();
     let table = PointTable::new(box_cloud(600, 2).cloud);
     for sub in ["a", "b"] {
@@ -228,4 +228,10 @@ fn several_inputs_refuse_clashing_or_replacing_outputs() {
     );
     fails(&[&"detect", &a, &b, &"-o", &a], "this is a file");
     assert!(!dir.path().join("out").exists(), "nothing created");
+
+    // One input to a path ending in a separator: a directory, created.
+    let into = format!("{}/", dir.path().join("single").display());
+    let run = bounded_paths(&[&"detect", &a, &"-o", &into]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(dir.path().join("single/t.ply").is_file());
 }

@@ -53,8 +53,8 @@ pub struct DetectArgs {
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Output cloud (.ply .pcd .xyz .txt .csv .las .laz .e57; the format follows the
-    /// extension), or a directory (created if missing) for several inputs, where each is
-    /// written under its own file name.
+    /// extension), or a directory (created if missing; for one input, an existing one or a
+    /// path ending in /) where each input is written under its own file name.
     #[arg(short, long)]
     pub output: PathBuf,
     /// With a directory output: write every cloud in this format (an extension such as

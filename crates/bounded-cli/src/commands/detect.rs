@@ -119,13 +119,15 @@ fn joined(tables: &[PointTable]) -> Result<PointCloud> {
     })?)
 }
 
-/// Where each input's result goes: `--output` for one input, unless it is a directory;
-/// else a file of the input's name in that directory, which is created. Checked before any
-/// work: known formats, an existing parent, no two inputs to one file, no input replaced by
-/// another's result.
+/// Where each input's result goes: `--output` for one input, unless it is a directory (or
+/// ends with a separator); else a file of the input's name in that directory, which is
+/// created. Checked before any work: known formats, an existing parent, no two inputs to one
+/// file, no input replaced by another's result.
 fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
     let output = &args.output;
-    if args.inputs.len() == 1 && !output.is_dir() {
+    let names_directory =
+        output.is_dir() || (output.to_str()).is_some_and(|s| s.ends_with(std::path::is_separator));
+    if args.inputs.len() == 1 && !names_directory {
         if args.format.is_some() {
             bail!(
                 "--format is for a directory output; {} names a file, whose extension gives the format",
