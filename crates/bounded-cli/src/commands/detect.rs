@@ -40,22 +40,13 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     })?;
 
     let writing = progress::spinner("write");
-    let mut written = Ok(());
-    let mut first = 0;
-    for (table, output) in tables.iter().zip(&outputs) {
+    // Each table's results are the next `len` of the joined run.
+    let written = (tables.iter().zip(&outputs)).try_fold(0, |first, (table, output)| {
         let range = first..first + table.len();
-        first = range.end;
-        let (classes, probabilities) = (&detection.classes, &detection.probabilities);
-        written = format::write_annotated(
-            output,
-            table,
-            &classes[range.clone()],
-            &probabilities[range],
-        );
-        if written.is_err() {
-            break;
-        }
-    }
+        let classes = &detection.classes[range.clone()];
+        let probabilities = &detection.probabilities[range.clone()];
+        format::write_annotated(output, table, classes, probabilities).map(|()| range.end)
+    });
     writing.finish_and_clear();
     written?;
 
