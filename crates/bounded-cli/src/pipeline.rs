@@ -1,11 +1,17 @@
 //! Detection: features streamed block by block straight into the classifier, so memory stays
-//! O(points + block) whatever the cloud's size.
+//! O(points + block) whatever the cloud's size. A two-stage model streams the features a
+//! second time, beside the context of the first stage's probabilities, into its second
+//! network (twice the time, 12 more bytes a point).
 
 use crate::progress;
 use anyhow::{Context, Result, bail};
-use bounded_features::{DEFAULT_CHUNK_POINTS, FeatureConfig, FeatureGroups, extract_chunks};
+use bounded_features::{
+    CONTEXT_NAMES, DEFAULT_CHUNK_POINTS, FeatureBlock, FeatureConfig, FeatureError, FeatureGroups,
+    extract_chunks, extract_chunks_in_context,
+};
 use bounded_geom::{Class, PointCloud};
 use bounded_nn::{Classifier, N_CLASSES, argmax};
+use indicatif::ProgressBar;
 use std::time::{Duration, Instant};
 
 /// Per-point results of a detection run.
@@ -42,6 +48,20 @@ pub fn feature_config(classifier: &Classifier, scales: Option<&[usize]>) -> Resu
             file.feature_names.join(", ")
         )
     })?;
+    if let Some(second) = &file.second_stage {
+        let expected = file
+            .feature_names
+            .iter()
+            .map(String::as_str)
+            .chain(CONTEXT_NAMES);
+        if !expected.eq(second.feature_names.iter().map(String::as_str)) {
+            bail!(
+                "the model's second stage reads [{}], not the first stage's features and the \
+                 context this build computes",
+                second.feature_names.join(", ")
+            );
+        }
+    }
     let scales = match scales {
         Some(s) if s.len() != file.scales.len() => bail!(
             "--scales lists {} scales but the model was trained on {} ({:?})",
@@ -92,31 +112,26 @@ pub fn detect(
         );
     }
     let start = Instant::now();
-    let bar = show_progress.then(|| progress::bar("detect", n as u64, "points"));
-    let mut probabilities = vec![[0f32; N_CLASSES]; n];
-    let mut block_out = Vec::new();
+    let stages = 1 + usize::from(classifier.second_stage().is_some());
+    let bar = show_progress.then(|| progress::bar("detect", (stages * n) as u64, "points"));
     let mut classification = Duration::ZERO;
-    let mut failure = None;
-    extract_chunks(cloud, config, DEFAULT_CHUNK_POINTS, |block| {
-        if failure.is_some() {
-            return;
-        }
-        let t = Instant::now();
-        block_out.resize(block.len(), [0f32; N_CLASSES]);
-        if let Err(e) = classifier.predict(block.values(), &mut block_out) {
-            failure = Some(e);
-            return;
-        }
-        for (&i, p) in block.points().iter().zip(&block_out) {
-            probabilities[i as usize] = *p;
-        }
-        classification += t.elapsed();
-        if let Some(bar) = &bar {
-            bar.inc(block.len() as u64);
-        }
-    })?;
-    if let Some(e) = failure {
-        return Err(e.into());
+    let mut probabilities = vec![[0f32; N_CLASSES]; n];
+    classify_stream(
+        classifier,
+        &mut probabilities,
+        &mut classification,
+        bar.as_ref(),
+        |f| extract_chunks(cloud, config, DEFAULT_CHUNK_POINTS, f),
+    )?;
+    if let Some(second) = classifier.second_stage() {
+        let first = std::mem::replace(&mut probabilities, vec![[0f32; N_CLASSES]; n]);
+        classify_stream(
+            second,
+            &mut probabilities,
+            &mut classification,
+            bar.as_ref(),
+            |f| extract_chunks_in_context(cloud, config, &first, DEFAULT_CHUNK_POINTS, f),
+        )?;
     }
     if let Some(bar) = bar {
         bar.finish_and_clear();
@@ -131,6 +146,41 @@ pub fn detect(
         elapsed: start.elapsed(),
         classification,
     })
+}
+
+/// Classifies the feature blocks that `stream` hands out into `probabilities` (cloud order),
+/// adding the classifier's time to `classification`.
+fn classify_stream(
+    classifier: &Classifier,
+    probabilities: &mut [[f32; N_CLASSES]],
+    classification: &mut Duration,
+    bar: Option<&ProgressBar>,
+    stream: impl FnOnce(&mut dyn FnMut(&FeatureBlock)) -> Result<(), FeatureError>,
+) -> Result<()> {
+    let mut block_out = Vec::new();
+    let mut failure = None;
+    stream(&mut |block| {
+        if failure.is_some() {
+            return;
+        }
+        let t = Instant::now();
+        block_out.resize(block.len(), [0f32; N_CLASSES]);
+        if let Err(e) = classifier.predict(block.values(), &mut block_out) {
+            failure = Some(e);
+            return;
+        }
+        for (&i, p) in block.points().iter().zip(&block_out) {
+            probabilities[i as usize] = *p;
+        }
+        *classification += t.elapsed();
+        if let Some(bar) = bar {
+            bar.inc(block.len() as u64);
+        }
+    })?;
+    match failure {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
+    }
 }
 
 #[cfg(test)]

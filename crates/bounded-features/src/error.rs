@@ -28,6 +28,14 @@ pub enum FeatureError {
         /// What is wrong with them.
         reason: &'static str,
     },
+    /// The first classifier's probabilities do not cover the cloud.
+    #[error("context of {probabilities} probabilities given for a cloud of {points} points")]
+    ContextLength {
+        /// Number of points in the cloud.
+        points: usize,
+        /// Number of probability triples given.
+        probabilities: usize,
+    },
     /// No feature group is selected.
     #[error("no feature group selected: at least one of the groups must be on")]
     NoFeatureGroups,

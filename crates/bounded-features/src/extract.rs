@@ -3,6 +3,7 @@
 use bounded_geom::{Distinct, GeomError, KnnIndex, PointCloud};
 use rayon::prelude::*;
 
+use crate::context::{CONTEXT_PER_SCALE, context};
 use crate::local::{LANES, Scratch, group_features};
 use crate::{FeatureConfig, FeatureError};
 
@@ -97,14 +98,45 @@ impl FeatureBlock {
 ///
 /// Built on [`extract_chunks`]; the result does not depend on chunking or thread count.
 pub fn extract(cloud: &PointCloud, config: &FeatureConfig) -> Result<Features, FeatureError> {
-    let per_point = config.features_per_point();
+    dense(cloud, config, None)
+}
+
+/// [`extract`] with the [context](crate::CONTEXT_NAMES) of a first classifier's
+/// `probabilities` (non-edge, sharp, boundary per point, in cloud order): per scale, the
+/// scale's features followed by its [`CONTEXT_PER_SCALE`] context values.
+pub fn extract_in_context(
+    cloud: &PointCloud,
+    config: &FeatureConfig,
+    probabilities: &[[f32; 3]],
+) -> Result<Features, FeatureError> {
+    dense(cloud, config, Some(probabilities))
+}
+
+/// Values per point of an extraction, with or without context.
+pub fn values_per_point(config: &FeatureConfig, in_context: bool) -> usize {
+    let context = if in_context { CONTEXT_PER_SCALE } else { 0 };
+    config.scales.len() * (config.features_per_scale() + context)
+}
+
+fn dense(
+    cloud: &PointCloud,
+    config: &FeatureConfig,
+    probabilities: Option<&[[f32; 3]]>,
+) -> Result<Features, FeatureError> {
+    let per_point = values_per_point(config, probabilities.is_some());
     let mut values = vec![0.0; cloud.len() * per_point];
-    extract_chunks(cloud, config, DEFAULT_CHUNK_POINTS, |block| {
-        for (row, &i) in block.points().iter().enumerate() {
-            let i = i as usize;
-            values[i * per_point..(i + 1) * per_point].copy_from_slice(block.row(row));
-        }
-    })?;
+    chunks(
+        cloud,
+        config,
+        probabilities,
+        DEFAULT_CHUNK_POINTS,
+        |block| {
+            for (row, &i) in block.points().iter().enumerate() {
+                let i = i as usize;
+                values[i * per_point..(i + 1) * per_point].copy_from_slice(block.row(row));
+            }
+        },
+    )?;
     Ok(Features { per_point, values })
 }
 
@@ -122,26 +154,64 @@ pub fn extract_chunks(
     cloud: &PointCloud,
     config: &FeatureConfig,
     chunk_points: usize,
+    f: impl FnMut(&FeatureBlock),
+) -> Result<(), FeatureError> {
+    chunks(cloud, config, None, chunk_points, f)
+}
+
+/// [`extract_chunks`] with the context of `probabilities`, laid out as in
+/// [`extract_in_context`].
+pub fn extract_chunks_in_context(
+    cloud: &PointCloud,
+    config: &FeatureConfig,
+    probabilities: &[[f32; 3]],
+    chunk_points: usize,
+    f: impl FnMut(&FeatureBlock),
+) -> Result<(), FeatureError> {
+    chunks(cloud, config, Some(probabilities), chunk_points, f)
+}
+
+fn chunks(
+    cloud: &PointCloud,
+    config: &FeatureConfig,
+    probabilities: Option<&[[f32; 3]]>,
+    chunk_points: usize,
     mut f: impl FnMut(&FeatureBlock),
 ) -> Result<(), FeatureError> {
     config.validate()?;
+    if let Some(p) = probabilities
+        && p.len() != cloud.len()
+    {
+        return Err(FeatureError::ContextLength {
+            points: cloud.len(),
+            probabilities: p.len(),
+        });
+    }
     let Some(distinct) = Distinct::of(cloud) else {
-        return extract_indexed(cloud, &KnnIndex::new(cloud)?, config, chunk_points, f);
+        let index = KnnIndex::new(cloud)?;
+        return extract_indexed(cloud, &index, config, probabilities, chunk_points, f);
     };
     let mut shared = FeatureBlock::default();
     let index = KnnIndex::of_subset(cloud, distinct.firsts())?;
-    extract_indexed(cloud, &index, config, chunk_points, |block| {
-        shared.per_point = block.per_point;
-        shared.points.clear();
-        shared.values.clear();
-        for (row, &first) in block.points.iter().enumerate() {
-            for &i in distinct.members(first) {
-                shared.points.push(i);
-                shared.values.extend_from_slice(block.row(row));
+    extract_indexed(
+        cloud,
+        &index,
+        config,
+        probabilities,
+        chunk_points,
+        |block| {
+            shared.per_point = block.per_point;
+            shared.points.clear();
+            shared.values.clear();
+            for (row, &first) in block.points.iter().enumerate() {
+                for &i in distinct.members(first) {
+                    shared.points.push(i);
+                    shared.values.extend_from_slice(block.row(row));
+                }
             }
-        }
-        f(&shared);
-    })
+            f(&shared);
+        },
+    )
     .map_err(|e| match e {
         FeatureError::Geom(GeomError::TooFewPoints { points, k }) => {
             FeatureError::TooFewDistinctPoints {
@@ -154,32 +224,60 @@ pub fn extract_chunks(
     })
 }
 
-/// [`extract_chunks`] for the points `index` holds, whose positions are all distinct.
+/// [`chunks`] for the points `index` holds, whose positions are all distinct.
 fn extract_indexed(
     cloud: &PointCloud,
     index: &KnnIndex,
     config: &FeatureConfig,
+    probabilities: Option<&[[f32; 3]]>,
     chunk_points: usize,
     mut f: impl FnMut(&FeatureBlock),
 ) -> Result<(), FeatureError> {
     let k0 = config.largest_scale();
     let points = cloud.points();
+    let features = config.features_per_point();
     let mut block = FeatureBlock {
-        per_point: config.features_per_point(),
+        per_point: values_per_point(config, probabilities.is_some()),
         ..FeatureBlock::default()
     };
+    // With context, the features go to a buffer of their own first, then beside the context.
+    let mut plain = Vec::new();
     index.for_each_chunk(k0, chunk_points, |chunk| {
         block.points.clear();
         block.points.extend_from_slice(chunk.queries());
         block.values.resize(chunk.len() * block.per_point, 0.0);
-        block
-            .values
-            .par_chunks_mut(block.per_point * LANES)
+        let out = match probabilities {
+            Some(_) => {
+                plain.resize(chunk.len() * features, 0.0);
+                &mut plain
+            }
+            None => &mut block.values,
+        };
+        out.par_chunks_mut(features * LANES)
             .zip(chunk.rows().par_chunks(k0 * LANES))
             .for_each_init(
                 || Scratch::new(k0),
                 |scratch, (out, rows)| group_features(points, rows, config, scratch, out),
             );
+        if let Some(probabilities) = probabilities {
+            let per_scale = config.features_per_scale();
+            block
+                .values
+                .par_chunks_mut(block.per_point)
+                .zip(plain.par_chunks(features))
+                .zip(chunk.rows().par_chunks(k0))
+                .for_each(|((out, features), row)| {
+                    let scales = out.chunks_exact_mut(per_scale + CONTEXT_PER_SCALE);
+                    for ((out, &k), features) in scales
+                        .zip(&config.scales)
+                        .zip(features.chunks_exact(per_scale))
+                    {
+                        let (own, context_out) = out.split_at_mut(per_scale);
+                        own.copy_from_slice(features);
+                        context_out.copy_from_slice(&context(points, &row[..k], probabilities));
+                    }
+                });
+        }
         f(&block);
     })?;
     Ok(())

@@ -19,6 +19,11 @@
 //!   neighbourhoods is `[0, 0, 1]`; sets with fewer than 2 points have zero `sigma`,
 //!   and `d` is zero when either set is empty.
 //!
+//! For a second classifier (auto-context), [`extract_in_context`] and
+//! [`extract_chunks_in_context`] put beside each scale's features [`CONTEXT_PER_SCALE`] values
+//! describing a first classifier's probabilities over the same neighbourhood
+//! ([`CONTEXT_NAMES`]).
+//!
 //! Results are bit-identical whatever the chunk size and thread count. Translating,
 //! rotating or scaling a cloud changes its `f32` coordinates by rounding only; the
 //! features follow continuously except where a neighbour lies within rounding of the
@@ -45,10 +50,15 @@
 //! ```
 
 mod config;
+mod context;
 mod error;
 mod extract;
 mod local;
 
 pub use config::{DEFAULT_SCALES, FeatureConfig, FeatureGroups};
+pub use context::{CONTEXT_NAMES, CONTEXT_PER_SCALE};
 pub use error::FeatureError;
-pub use extract::{DEFAULT_CHUNK_POINTS, FeatureBlock, Features, extract, extract_chunks};
+pub use extract::{
+    DEFAULT_CHUNK_POINTS, FeatureBlock, Features, extract, extract_chunks,
+    extract_chunks_in_context, extract_in_context, values_per_point,
+};

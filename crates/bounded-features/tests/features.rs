@@ -4,7 +4,8 @@
 //! d_perp 6, d_par 7, s_perp 8, s_par 9, c_perp 10, c_par 11.
 
 use bounded_features::{
-    FeatureConfig, FeatureError, FeatureGroups, Features, extract, extract_chunks,
+    CONTEXT_PER_SCALE, FeatureConfig, FeatureError, FeatureGroups, Features, extract,
+    extract_chunks, extract_in_context,
 };
 use bounded_geom::{GeomError, PointCloud};
 
@@ -261,14 +262,93 @@ fn invariant_under_translation_rotation_and_scale() {
         ),
         ("scale", Box::new(|p| p.map(|v| v * 1234.5))),
     ];
+    // Context of arbitrary first-stage probabilities moves with the features.
+    let mut rng = Rng(9);
+    let probabilities: Vec<[f32; 3]> = (0..pts.len())
+        .map(|_| {
+            let (a, b) = (rng.next() as f32, rng.next() as f32);
+            [(1.0 - a) * (1.0 - b), a, (1.0 - a) * b]
+        })
+        .collect();
+    let in_context = |points: &[[f64; 3]]| {
+        let cloud = PointCloud::from_f64(points).unwrap();
+        extract_in_context(&cloud, &config(&scales), &probabilities).unwrap()
+    };
+    let base_context = in_context(&pts);
     for (name, t) in transforms {
         let moved: Vec<_> = pts.iter().map(|&p| t(p)).collect();
         let d = differing_points(&base, &run(&moved, &scales), 1e-3);
         assert!(d <= pts.len() / 100, "{name}: {d} points differ");
+        let d = differing_points(&base_context, &in_context(&moved), 1e-3);
+        assert!(
+            d <= pts.len() / 100,
+            "{name}, in context: {d} points differ"
+        );
     }
     let tiny: Vec<_> = pts.iter().map(|p| p.map(|v| v * 1e-12)).collect();
     let d = differing_points(&base, &run(&tiny, &scales), 1e-3);
     assert!(d <= pts.len() / 100, "tiny coordinates: {d} points differ");
+}
+
+#[test]
+fn context_of_a_row_of_sharp_points_beside_the_features() {
+    // An exact 12 x 12 grid of unit spacing; the first stage calls row y = 6 sharp. At
+    // k = 5 a point has its 4 nearest grid neighbours, at k = 9 also the 4 diagonal ones.
+    let n = 12;
+    let pts: Vec<[f64; 3]> = (0..n * n)
+        .map(|i| [(i % n) as f64, (i / n) as f64, 0.0])
+        .collect();
+    let probabilities: Vec<[f32; 3]> = (0..n * n)
+        .map(|i| match i / n {
+            6 => [0.0, 1.0, 0.0],
+            _ => [1.0, 0.0, 0.0],
+        })
+        .collect();
+    let cloud = PointCloud::from_f64(&pts).unwrap();
+    let cfg = config(&[9, 5]);
+    let plain = extract(&cloud, &cfg).unwrap();
+    let with = extract_in_context(&cloud, &cfg, &probabilities).unwrap();
+    let per_scale = 12 + CONTEXT_PER_SCALE;
+    assert_eq!(with.per_point(), 2 * per_scale);
+    for i in 0..n * n {
+        for s in 0..2 {
+            let own = &with.point(i)[s * per_scale..s * per_scale + 12];
+            assert_eq!(own, &plain.point(i)[s * 12..s * 12 + 12], "point {i}");
+        }
+    }
+    let context = |cx, cy, s: usize| {
+        let start = s * per_scale + 12;
+        with.point(cell(n, cx, cy))[start..start + CONTEXT_PER_SCALE].to_vec()
+    };
+    let third = 1.0 / 3.0;
+    let cases = [
+        // On the row: its two row neighbours are sharp, centred on the point.
+        ((6, 6, 1), [0.6, 0.0, 0.0, 0.4]),
+        ((6, 6, 0), [third, 0.0, 0.0, 1.0 - third]),
+        // Beside it: one sharp neighbour straight up (offset = radius), then three
+        // centred on the one above, at 1 of radius sqrt 2.
+        ((6, 5, 1), [0.2, 0.0, 1.0, -0.2]),
+        ((6, 5, 0), [third, 0.0, 0.5f32.sqrt(), -third]),
+        // Far from it: no sharp probability, the rim value 1.
+        ((6, 2, 0), [0.0, 0.0, 1.0, 0.0]),
+    ];
+    for ((cx, cy, s), expected) in cases {
+        let got = context(cx, cy, s);
+        for (g, e) in got.iter().zip(expected) {
+            assert!(
+                (g - e).abs() < 1e-6,
+                "({cx}, {cy}) scale {s}: {got:?} vs {expected:?}"
+            );
+        }
+    }
+    let e = extract_in_context(&cloud, &cfg, &probabilities[1..]).unwrap_err();
+    assert_eq!(
+        e,
+        FeatureError::ContextLength {
+            points: n * n,
+            probabilities: n * n - 1
+        }
+    );
 }
 
 #[test]

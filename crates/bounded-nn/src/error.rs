@@ -17,12 +17,12 @@ pub enum NnError {
     BadMagic,
     /// A model file written by another format version.
     #[error(
-        "model file format version {found} is not supported (this build reads version {expected})"
+        "model file format version {found} is not supported (this build reads versions 1 to {expected})"
     )]
     UnsupportedVersion {
         /// Version found in the file.
         found: u32,
-        /// Version this build reads and writes.
+        /// Newest version this build reads.
         expected: u32,
     },
     /// A model file whose stored layer sizes contradict its own configuration.

@@ -3,7 +3,9 @@
 //! Layout: the 8 magic bytes `BOUNDED\0`, the format version as a little-endian `u32`, then
 //! the [`ModelFile`] as MessagePack with field names (rmp-serde). The version sits outside the
 //! MessagePack body so that a file of another version is reported as such rather than as a
-//! decoding error.
+//! decoding error. Version 2 added the optional second stage; a file without one is written as
+//! version 1, so builds that predate it still read it, and they refuse a two-stage file rather
+//! than run its first stage alone.
 
 use std::path::Path;
 
@@ -17,8 +19,9 @@ use crate::{
 /// First bytes of every model file.
 pub const MAGIC: [u8; 8] = *b"BOUNDED\0";
 
-/// The format version this build reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+/// The newest format version, which this build writes for two-stage models; it reads every
+/// version from 1.
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Where a model came from: enough to reproduce it and to recognise its training data.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -56,6 +59,12 @@ pub struct ModelFile {
     pub provenance: Provenance,
     /// Weights of every layer in [`ModelConfig::layer_shapes`] order.
     pub layers: Vec<LayerWeights>,
+    /// An optional second network (auto-context), whose probabilities are the model's output.
+    /// Its inputs per scale are this network's features followed by the context of this
+    /// network's probabilities over the same neighbourhood (`bounded-features`'
+    /// `CONTEXT_NAMES`); its scales are this one's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub second_stage: Option<Box<ModelFile>>,
 }
 
 impl ModelFile {
@@ -84,9 +93,25 @@ impl ModelFile {
                 batch_size: config.batch_size,
             },
             layers: trained.model.export_weights()?,
+            second_stage: None,
         };
         file.validate()?;
         Ok(file)
+    }
+
+    /// This network followed by `second`, trained on this one's features and context.
+    pub fn with_second_stage(self, second: ModelFile) -> Result<Self, NnError> {
+        let file = Self {
+            second_stage: Some(Box::new(second)),
+            ..self
+        };
+        file.validate()?;
+        Ok(file)
+    }
+
+    /// The format version this file is written with: the oldest that holds it.
+    pub fn format_version(&self) -> u32 {
+        if self.second_stage.is_some() { 2 } else { 1 }
     }
 
     /// Checks that every stored size agrees with the configuration and that all numbers are
@@ -128,6 +153,23 @@ impl ModelFile {
         if std.std.iter().any(|&s| s <= 0.0) {
             return bad("non-positive standard deviation".into());
         }
+        if let Some(second) = &self.second_stage {
+            second.validate()?;
+            if second.second_stage.is_some() {
+                return bad("a second stage with a stage of its own".into());
+            }
+            if second.scales != self.scales || second.class_names != self.class_names {
+                return bad("a second stage with other scales or classes".into());
+            }
+            let own = &second.feature_names;
+            if own.len() <= self.feature_names.len() || !own.starts_with(&self.feature_names) {
+                return bad(format!(
+                    "second stage features [{}] do not extend the first's [{}]",
+                    own.join(", "),
+                    self.feature_names.join(", ")
+                ));
+            }
+        }
         let numbers = self
             .layers
             .iter()
@@ -145,7 +187,7 @@ impl ModelFile {
     /// Encodes the file (magic, version, MessagePack body).
     pub fn to_bytes(&self) -> Result<Vec<u8>, NnError> {
         let mut bytes = MAGIC.to_vec();
-        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        bytes.extend_from_slice(&self.format_version().to_le_bytes());
         bytes.extend(rmp_serde::to_vec_named(self)?);
         Ok(bytes)
     }
@@ -155,13 +197,18 @@ impl ModelFile {
         let body = bytes.strip_prefix(&MAGIC).ok_or(NnError::BadMagic)?;
         let (version, body) = body.split_first_chunk::<4>().ok_or(NnError::BadMagic)?;
         let found = u32::from_le_bytes(*version);
-        if found != FORMAT_VERSION {
+        if !(1..=FORMAT_VERSION).contains(&found) {
             return Err(NnError::UnsupportedVersion {
                 found,
                 expected: FORMAT_VERSION,
             });
         }
         let file: Self = rmp_serde::from_slice(body)?;
+        if file.format_version() > found {
+            return Err(NnError::InconsistentModel(format!(
+                "a second stage in a version {found} file"
+            )));
+        }
         file.validate()?;
         Ok(file)
     }
@@ -212,7 +259,19 @@ pub(crate) mod tests {
             },
             layers,
             model,
+            second_stage: None,
         }
+    }
+
+    /// `random_file(n_scales, fps, seed)` with a random second stage over 4 context values.
+    pub(crate) fn two_stage_file(n_scales: usize, fps: usize, seed: u64) -> ModelFile {
+        let mut second = random_file(n_scales, fps + 4, seed + 1);
+        let first = random_file(n_scales, fps, seed);
+        second.feature_names = first.feature_names.clone();
+        second
+            .feature_names
+            .extend((0..4).map(|i| format!("ctx{i}")));
+        first.with_second_stage(second).unwrap()
     }
 
     #[test]
@@ -221,6 +280,41 @@ pub(crate) mod tests {
         let bytes = file.to_bytes().unwrap();
         assert_eq!(&bytes[..8], b"BOUNDED\0");
         assert_eq!(ModelFile::from_bytes(&bytes).unwrap(), file);
+    }
+
+    #[test]
+    fn two_stages_round_trip_as_version_2() {
+        let file = two_stage_file(4, 12, 3);
+        let bytes = file.to_bytes().unwrap();
+        assert_eq!(&bytes[8..12], &2u32.to_le_bytes());
+        assert_eq!(ModelFile::from_bytes(&bytes).unwrap(), file);
+        // A single stage stays version 1, which older builds read.
+        let bytes = random_file(4, 12, 3).to_bytes().unwrap();
+        assert_eq!(&bytes[8..12], &1u32.to_le_bytes());
+    }
+
+    #[test]
+    fn inconsistent_second_stages_are_rejected() {
+        let file = two_stage_file(2, 6, 1);
+        // Labelled version 1: a build of that version would have dropped the second stage.
+        let mut bytes = file.to_bytes().unwrap();
+        bytes[8..12].copy_from_slice(&1u32.to_le_bytes());
+        assert!(matches!(
+            ModelFile::from_bytes(&bytes),
+            Err(NnError::InconsistentModel(m)) if m.contains("version 1")
+        ));
+        let first = random_file(2, 6, 1);
+        let mut second = file.second_stage.clone().unwrap();
+        second.scales[0] += 1;
+        assert!(first.clone().with_second_stage(*second).is_err());
+        // Features that do not extend the first stage's.
+        let mut second = random_file(2, 10, 2);
+        second.feature_names.reverse();
+        let e = first.clone().with_second_stage(second).unwrap_err();
+        assert!(e.to_string().contains("do not extend"), "{e}");
+        // No third stage.
+        let nested = file.clone().with_second_stage(file.clone());
+        assert!(nested.is_err());
     }
 
     #[test]

@@ -43,6 +43,8 @@ pub struct Classifier {
     slope: f32,
     /// Rows needed by the widest stage input or output.
     max_rows: usize,
+    /// The model's second network, if it has one.
+    second_stage: Option<Box<Classifier>>,
 }
 
 impl Classifier {
@@ -75,7 +77,12 @@ impl Classifier {
             .max()
             .unwrap_or(0)
             .max(file.model.n_inputs());
+        let second_stage = match &file.second_stage {
+            Some(second) => Some(Box::new(Self::from_file((**second).clone())?)),
+            None => None,
+        };
         Ok(Self {
+            second_stage,
             mean: file.standardisation.mean.clone(),
             inv_std: file.standardisation.inv_std(),
             slope: file.model.leaky_slope as f32,
@@ -100,6 +107,13 @@ impl Classifier {
         &self.file
     }
 
+    /// The second network of a two-stage model (see [`ModelFile::second_stage`]): it
+    /// classifies the features beside the context of this network's probabilities, and its
+    /// output is the model's.
+    pub fn second_stage(&self) -> Option<&Classifier> {
+        self.second_stage.as_deref()
+    }
+
     /// Inputs per point (`n_scales * features_per_scale`).
     pub fn n_inputs(&self) -> usize {
         self.mean.len()
@@ -108,6 +122,8 @@ impl Classifier {
     /// Softmax class probabilities for every point of `features` (row-major
     /// `[point][scale][feature]`, [`n_inputs`](Self::n_inputs) per point) into `out`, one entry
     /// per point.
+    /// For a two-stage model these are the first network's: the second one's inputs need
+    /// them over every point's neighbourhood first.
     pub fn predict(&self, features: &[f32], out: &mut [[f32; N_CLASSES]]) -> Result<(), NnError> {
         let n = self.n_inputs();
         if features.len() != out.len() * n {
@@ -251,11 +267,21 @@ mod tests {
     use super::*;
     use crate::backend::read_f32;
     use crate::cpu_device;
-    use crate::file::tests::random_file;
+    use crate::file::tests::{random_file, two_stage_file};
     use burn::prelude::*;
     use burn::tensor::activation::softmax as burn_softmax;
     use rand::rngs::StdRng;
     use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn a_two_stage_file_gives_a_second_classifier() {
+        let classifier = Classifier::from_file(two_stage_file(4, 12, 5)).unwrap();
+        assert_eq!(classifier.n_inputs(), 48);
+        let second = classifier.second_stage().unwrap();
+        assert_eq!(second.n_inputs(), 64);
+        assert!(second.second_stage().is_none());
+        assert!(crate::default_model().unwrap().second_stage().is_none());
+    }
 
     #[test]
     fn matches_burn_forward_on_random_inputs() {

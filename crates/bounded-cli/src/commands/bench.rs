@@ -121,7 +121,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
     // Timing of the default configuration, as the paper's timing table.
     let t = Instant::now();
-    let main_train = train::feature_set(&training, &main, "features")?;
+    let main_train = train::feature_set(&training, &main, None, "features")?;
     let train_features_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let main_file = train::fit(
@@ -135,7 +135,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     drop(main_train);
     let classifier = Classifier::from_file(main_file)?;
 
-    let train_full = train::feature_set(&training, &full, "features16")?;
+    let train_full = train::feature_set(&training, &full, None, "features16")?;
     drop(training);
     let sets = [
         load_eval(&pcednet.join("default"), "default", &full)?,
@@ -216,7 +216,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "{:?} / {:?} ({} parameters)",
             widths.fusion,
             widths.hidden,
-            widths.model(&main).n_params()
+            widths.model(&main, false).n_params()
         );
         report.push_str(&ablation(&label, &main, &widths)?);
     }
@@ -377,6 +377,7 @@ fn select(set: &FeatureSet, columns: &[usize]) -> FeatureSet {
         features,
         labels: set.labels.clone(),
         per_point: columns.len(),
+        in_context: set.in_context,
     }
 }
 
@@ -403,7 +404,8 @@ fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Resul
         .into_iter()
         .map(|(name, labelled)| {
             let truth = Class::codes(&labelled.labels);
-            let features = train::feature_set(&[(name.clone(), labelled)], full, "features16")?;
+            let features =
+                train::feature_set(&[(name.clone(), labelled)], full, None, "features16")?;
             Ok(Featured {
                 name,
                 truth,

@@ -5,8 +5,11 @@ use crate::cli::{FeatureGroupArg, TrainArgs};
 use crate::{atomic, progress};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
-use bounded_features::{FeatureConfig, FeatureGroups, extract};
-use bounded_nn::{Dataset, ModelConfig, ModelFile, TrainConfig, train};
+use bounded_features::{
+    CONTEXT_NAMES, CONTEXT_PER_SCALE, FeatureConfig, FeatureGroups, extract, extract_in_context,
+    values_per_point,
+};
+use bounded_nn::{Classifier, Dataset, ModelConfig, ModelFile, N_CLASSES, TrainConfig, train};
 use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -19,6 +22,8 @@ pub struct FeatureSet {
     pub labels: Vec<u8>,
     /// Values per row.
     pub per_point: usize,
+    /// Whether every scale's features are followed by the context of a first stage.
+    pub in_context: bool,
 }
 
 impl FeatureSet {
@@ -59,32 +64,45 @@ impl Default for Widths {
 }
 
 impl Widths {
-    /// The network for `config`'s features with these widths.
-    pub fn model(&self, config: &FeatureConfig) -> ModelConfig {
-        ModelConfig::new(config.scales.len(), config.features_per_scale())
+    /// The network for `config`'s features, `in_context` of a first stage or not, with these
+    /// widths.
+    pub fn model(&self, config: &FeatureConfig, in_context: bool) -> ModelConfig {
+        let context = if in_context { CONTEXT_PER_SCALE } else { 0 };
+        ModelConfig::new(config.scales.len(), config.features_per_scale() + context)
             .with_fusion_widths(self.fusion.clone())
             .with_hidden_widths(self.hidden.clone())
     }
 }
 
-/// Computes the features of every cloud with `config`.
+/// Computes the features of every cloud with `config`; with a `first` stage, each beside the
+/// context of the first stage's probabilities (for a second stage).
 pub fn feature_set(
     clouds: &[(String, LabelledCloud)],
     config: &FeatureConfig,
+    first: Option<&Classifier>,
     step: &str,
 ) -> Result<FeatureSet> {
     let total = clouds.iter().map(|(_, c)| c.cloud.len()).sum::<usize>();
     let bar = progress::bar(step, total as u64, "points");
+    let per_point = values_per_point(config, first.is_some());
     let mut set = FeatureSet {
-        features: Vec::with_capacity(total * config.features_per_point()),
+        features: Vec::with_capacity(total * per_point),
         labels: Vec::with_capacity(total),
-        per_point: config.features_per_point(),
+        per_point,
+        in_context: first.is_some(),
     };
     for (name, labelled) in clouds {
-        let features = extract(&labelled.cloud, config).with_context(|| name.clone())?;
+        let cloud = &labelled.cloud;
+        let mut features = extract(cloud, config).with_context(|| name.clone())?;
+        if let Some(first) = first {
+            let mut probabilities = vec![[0f32; N_CLASSES]; cloud.len()];
+            first.predict(features.as_slice(), &mut probabilities)?;
+            features =
+                extract_in_context(cloud, config, &probabilities).with_context(|| name.clone())?;
+        }
         set.features.extend_from_slice(features.as_slice());
         set.labels.extend(labelled.labels.iter().map(|&c| c as u8));
-        bar.inc(labelled.cloud.len() as u64);
+        bar.inc(cloud.len() as u64);
     }
     bar.finish_and_clear();
     Ok(set)
@@ -99,7 +117,7 @@ pub fn fit(
     command: String,
 ) -> Result<ModelFile> {
     let data = Dataset::new(&set.features, &set.labels, set.per_point)?;
-    let train_config = TrainConfig::new(widths.model(config))
+    let train_config = TrainConfig::new(widths.model(config, set.in_context))
         .with_iterations(schedule.iterations)
         .with_runs(schedule.runs)
         .with_seed(schedule.seed);
@@ -116,11 +134,17 @@ pub fn fit(
         }
     })?;
     bar.finish_and_clear();
+    let context = set
+        .in_context
+        .then_some(CONTEXT_NAMES)
+        .into_iter()
+        .flatten();
     let names = config
         .groups
         .names()
-        .iter()
-        .map(|s| s.to_string())
+        .into_iter()
+        .chain(context)
+        .map(str::to_string)
         .collect();
     Ok(ModelFile::from_trained(
         &trained,
@@ -166,7 +190,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         hidden: args.hidden_widths.clone().unwrap_or(defaults.hidden),
     };
     // A bad width fails now, not after the features.
-    widths.model(&config).validate()?;
+    widths.model(&config, args.context).validate()?;
     let mut clouds = Vec::new();
     for source in &args.data {
         let loading = progress::spinner("load");
@@ -175,7 +199,13 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         loading.finish_and_clear();
         clouds.extend(loaded?);
     }
-    let set = feature_set(&clouds, &config, "features")?;
+    let mut counts = [0usize; N_CLASSES];
+    for (_, labelled) in &clouds {
+        for &l in &labelled.labels {
+            counts[l as usize] += 1;
+        }
+    }
+    let set = feature_set(&clouds, &config, None, "features")?;
     let features_seconds = start.elapsed().as_secs_f64();
     let schedule = Schedule {
         iterations: args.iterations,
@@ -183,17 +213,21 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         seed: args.seed,
     };
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let file = fit(&set, &config, &schedule, &widths, command)?;
-    save(&file, &args.output)?;
-    let mut counts = [0usize; 3];
-    for &l in &set.labels {
-        counts[l as usize] += 1;
+    let mut file = fit(&set, &config, &schedule, &widths, command.clone())?;
+    drop(set);
+    if args.context {
+        let first = Classifier::from_file(file.clone())?;
+        let set = feature_set(&clouds, &config, Some(&first), "context")?;
+        let second = fit(&set, &config, &schedule, &widths, command)?;
+        file = file.with_second_stage(second)?;
     }
+    save(&file, &args.output)?;
+    let points: usize = counts.iter().sum();
     eprintln!(
         "{} clouds, {} points ({} sharp, {} boundary): features {features_seconds:.1} s, \
          total {:.1} s, best validation loss {:.4}; wrote {}",
         clouds.len(),
-        set.len(),
+        points,
         counts[1],
         counts[2],
         start.elapsed().as_secs_f64(),
