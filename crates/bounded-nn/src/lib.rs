@@ -23,6 +23,12 @@
 //! Training: build a [`Dataset`] over the feature rows and labels, a [`TrainConfig`] over a
 //! [`ModelConfig`], call [`train`], pack the result with [`ModelFile::from_trained`] and build a
 //! [`Classifier`] from the file.
+//!
+//! A two-stage model ([`ModelFile::second_stage`], [`Classifier::second_stage`]) holds a second
+//! network whose inputs are the features beside the context of the first network's
+//! probabilities over each point's neighbourhoods (`bounded-features`' `extract_in_context`):
+//! [`Classifier::predict`] gives the first network's probabilities, which those context
+//! features need, and the second network's prediction over them is the model's.
 
 mod backend;
 pub mod data;

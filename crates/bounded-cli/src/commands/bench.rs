@@ -5,7 +5,7 @@
 //! smaller configuration's features exactly a subset), so the ablations cost only training.
 
 use super::eval::{self, MethodResults, ModelResult};
-use super::train::{self, FeatureSet, Schedule, Widths};
+use super::train::{self, FeatureSet, Schedule, Seconds, Widths};
 use super::{rate, sources};
 use crate::cli::BenchArgs;
 use crate::peers;
@@ -14,9 +14,9 @@ use crate::{atomic, pipeline};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
-use bounded_features::{FeatureConfig, FeatureGroups};
-use bounded_geom::Class;
-use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix};
+use bounded_features::{FeatureConfig, FeatureGroups, extract_in_context};
+use bounded_geom::{Class, PointCloud};
+use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, ModelFile, N_CLASSES};
 use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -52,6 +52,8 @@ const NOISE_SWEEP: [(f64, NoiseDirection); 6] = [
 /// Clouds with their features at the full configuration.
 struct Featured {
     name: String,
+    /// The cloud, for a second stage's context features.
+    cloud: PointCloud,
     truth: Vec<u8>,
     features: FeatureSet,
 }
@@ -86,7 +88,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     eprintln!(
         "bench: {} mode, expected duration about {} minutes on 2 cores (full mode peaks near 12 GB of memory)",
         if args.quick { "quick" } else { "full" },
-        if args.quick { 4 } else { 35 }
+        if args.quick { 6 } else { 65 }
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
@@ -108,7 +110,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut report = String::from("# BoundED-rs bench\n\n");
     let _ = writeln!(
         report,
-        "Mode: {}; {} iterations, best of {} runs for the main model (ablations: 1 run). \
+        "Mode: {}; {} iterations, best of {} runs for each of the main model's two stages \
+         (the second auto-context; ablations: single-stage, 1 run). \
          Training data: {} ({} clouds, {} points). \
          Evaluation data is never trained on.\n",
         if args.quick { "quick" } else { "full" },
@@ -120,19 +123,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
 
     // Timing of the default configuration, as the paper's timing table.
-    let t = Instant::now();
-    let main_train = train::feature_set(&training, &main, None, "features")?;
-    let train_features_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let main_file = train::fit(
-        &main_train,
+    let (main_file, train_seconds) = train::fit_stages(
+        &training,
         &main,
         &schedule,
         &Widths::default(),
+        true,
         "bounded bench".into(),
     )?;
-    let train_s = t.elapsed().as_secs_f64();
-    drop(main_train);
+    // The ablations are single-stage: the main model's first stage is their reference.
+    let first_stage = Classifier::from_file(ModelFile {
+        second_stage: None,
+        ..main_file.clone()
+    })?;
     let classifier = Classifier::from_file(main_file)?;
 
     let train_full = train::feature_set(&training, &full, None, "features16")?;
@@ -178,15 +181,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         &classifier,
         &main,
         &args.data,
-        train_features_s,
-        train_s,
+        &train_seconds,
     )?);
 
     // 4: ablations; the configuration of the main model reuses it instead of retraining.
     let ablation = |label: &str, target: &FeatureConfig, widths: &Widths| -> Result<String> {
         let ablated;
         let model = if *target == main && *widths == Widths::default() {
-            &classifier
+            &first_stage
         } else {
             ablated = trained(&train_full, &full, target, &ablation_schedule, widths)?;
             &ablated
@@ -220,6 +222,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
         report.push_str(&ablation(&label, &main, &widths)?);
     }
+    let second = classifier.file().second_stage.as_deref();
+    let label = format!(
+        "{:?} / {:?} and an auto-context second stage ({} parameters; the main model)",
+        Widths::default().fusion,
+        Widths::default().hidden,
+        classifier.file().model.n_params() + second.map_or(0, |f| f.model.n_params())
+    );
+    report.push_str(&ablation_row(&label, &classifier, &full, &main, &sets)?);
 
     // 5: noise and boundaries.
     let clean = score(&classifier, &full, &main, &sets[1])?;
@@ -404,10 +414,12 @@ fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Resul
         .into_iter()
         .map(|(name, labelled)| {
             let truth = Class::codes(&labelled.labels);
-            let features =
-                train::feature_set(&[(name.clone(), labelled)], full, None, "features16")?;
+            let one = [(name, labelled)];
+            let features = train::feature_set(&one, full, None, "features16")?;
+            let [(name, labelled)] = one;
             Ok(Featured {
                 name,
+                cloud: labelled.cloud,
                 truth,
                 features,
             })
@@ -443,7 +455,8 @@ fn noise_eval(full: &FeatureConfig, level: f64, direction: NoiseDirection) -> Re
     })
 }
 
-/// Classifies every cloud of `set` with `model` (features `target`, selected from `full`).
+/// Classifies every cloud of `set` with `model` (features `target`, selected from `full`; a
+/// second stage's context features computed anew).
 fn score(
     model: &Classifier,
     full: &FeatureConfig,
@@ -454,7 +467,16 @@ fn score(
     set.clouds
         .iter()
         .map(|c| {
-            let predicted = model.classify(&select(&c.features, &columns).features)?;
+            let rows = select(&c.features, &columns).features;
+            let predicted = match model.second_stage() {
+                None => model.classify(&rows)?,
+                Some(second) => {
+                    let mut first = vec![[0f32; N_CLASSES]; c.cloud.len()];
+                    model.predict(&rows, &mut first)?;
+                    let context = extract_in_context(&c.cloud, target, &first)?;
+                    second.classify(context.as_slice())?
+                }
+            };
             Ok(ModelResult {
                 name: c.name.clone(),
                 matrix: ConfusionMatrix::from_labels(&c.truth, &predicted)?,
@@ -491,13 +513,13 @@ fn timing_table(
     classifier: &Classifier,
     main: &FeatureConfig,
     data: &Path,
-    train_features_s: f64,
-    train_s: f64,
+    train: &Seconds,
 ) -> Result<String> {
     let mut out = format!(
-        "## Timing (2 cores, CPU only)\n\nTraining: features {train_features_s:.1} s, \
-         training {train_s:.1} s.\n\n| set | points | features + kNN s | classification s | points/s |\n\
-         |---|---|---|---|---|\n"
+        "## Timing (2 cores, CPU only)\n\nTraining (both stages): features {:.1} s, \
+         training {:.1} s.\n\n| set | points | features + kNN s | classification s | points/s |\n\
+         |---|---|---|---|---|\n",
+        train.features, train.training
     );
     for key in ["default", "abc"] {
         let clouds = eval::load_set(&data.join("pcednet").join(key), Class::NonEdge)?;

@@ -154,6 +154,48 @@ pub fn fit(
     )?)
 }
 
+/// Seconds spent on the training clouds' features and on training.
+pub struct Seconds {
+    /// Feature extraction (both passes for two stages).
+    pub features: f64,
+    /// Training (both networks for two stages).
+    pub training: f64,
+}
+
+/// Features of `clouds`, then the network; with `context`, then the context features of its
+/// probabilities and the second network, packed as one two-stage model.
+pub fn fit_stages(
+    clouds: &[(String, LabelledCloud)],
+    config: &FeatureConfig,
+    schedule: &Schedule,
+    widths: &Widths,
+    context: bool,
+    command: String,
+) -> Result<(ModelFile, Seconds)> {
+    let mut seconds = Seconds {
+        features: 0.0,
+        training: 0.0,
+    };
+    let t = Instant::now();
+    let set = feature_set(clouds, config, None, "features")?;
+    seconds.features += t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let file = fit(&set, config, schedule, widths, command.clone())?;
+    seconds.training += t.elapsed().as_secs_f64();
+    drop(set);
+    if !context {
+        return Ok((file, seconds));
+    }
+    let t = Instant::now();
+    let first = Classifier::from_file(file.clone())?;
+    let set = feature_set(clouds, config, Some(&first), "context")?;
+    seconds.features += t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let second = fit(&set, config, schedule, widths, command)?;
+    seconds.training += t.elapsed().as_secs_f64();
+    Ok((file.with_second_stage(second)?, seconds))
+}
+
 /// Writes a model file atomically.
 pub fn save(file: &ModelFile, path: &Path) -> Result<()> {
     let bytes = file.to_bytes()?;
@@ -205,31 +247,23 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             counts[l as usize] += 1;
         }
     }
-    let set = feature_set(&clouds, &config, None, "features")?;
-    let features_seconds = start.elapsed().as_secs_f64();
     let schedule = Schedule {
         iterations: args.iterations,
         runs: args.runs,
         seed: args.seed,
     };
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let mut file = fit(&set, &config, &schedule, &widths, command.clone())?;
-    drop(set);
-    if args.context {
-        let first = Classifier::from_file(file.clone())?;
-        let set = feature_set(&clouds, &config, Some(&first), "context")?;
-        let second = fit(&set, &config, &schedule, &widths, command)?;
-        file = file.with_second_stage(second)?;
-    }
+    let (file, seconds) = fit_stages(&clouds, &config, &schedule, &widths, args.context, command)?;
     save(&file, &args.output)?;
     let points: usize = counts.iter().sum();
     eprintln!(
-        "{} clouds, {} points ({} sharp, {} boundary): features {features_seconds:.1} s, \
+        "{} clouds, {} points ({} sharp, {} boundary): features {:.1} s, \
          total {:.1} s, best validation loss {:.4}; wrote {}",
         clouds.len(),
         points,
         counts[1],
         counts[2],
+        seconds.features,
         start.elapsed().as_secs_f64(),
         file.provenance.val_loss,
         args.output.display()
