@@ -280,7 +280,6 @@ mod tests {
         let second = classifier.second_stage().unwrap();
         assert_eq!(second.n_inputs(), 64);
         assert!(second.second_stage().is_none());
-        assert!(crate::default_model().unwrap().second_stage().is_none());
     }
 
     #[test]

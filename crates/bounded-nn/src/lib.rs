@@ -52,7 +52,8 @@ pub use model::{CLASS_NAMES, LayerWeights, Model, ModelConfig, N_CLASSES};
 pub use standardisation::Standardisation;
 pub use training::{Progress, TrainConfig, TrainedModel, train};
 
-/// The embedded default model (4 scales of 128, 64, 32, 16 neighbours x 12 features), trained
+/// The embedded default model (4 scales of 128, 64, 32, 16 neighbours x 12 features, and an
+/// auto-context second stage over those features beside 4 context values per scale), trained
 /// on generated sets only by the `bounded train` command recorded in the file and in README.md.
 const DEFAULT_MODEL: &[u8] = include_bytes!("../models/default.bmodel");
 
@@ -73,5 +74,8 @@ mod tests {
         assert_eq!(file.feature_names.len(), 12);
         assert_eq!(file.model.n_params(), 1595);
         assert_eq!(file.class_names, CLASS_NAMES);
+        let second = classifier.second_stage().expect("an auto-context second stage");
+        assert_eq!(second.file().feature_names.len(), 12 + 4);
+        assert_eq!(second.file().model.n_params(), 1787);
     }
 }
