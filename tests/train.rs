@@ -109,6 +109,42 @@ fn a_context_model_labels_with_its_second_stage() {
     let changed = first.iter().zip(&expected).filter(|(a, b)| a != b).count();
     assert!(changed > 0, "the second stage changed no probability");
 
+    // --fast runs the first stage alone; a one-stage model has nothing to leave out.
+    let fast = dir.path().join("fast.ply");
+    let run = bounded_paths(&[
+        &"detect",
+        &cloud_path,
+        &"--model",
+        &model,
+        &"--fast",
+        &"-o",
+        &fast,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let fast = bounded_data::format::read(&fast).unwrap();
+    let fast_sharp = fast.property("p_sharp").expect("p_sharp");
+    for (i, p) in first.iter().enumerate() {
+        assert!(
+            (fast_sharp.get_f64(i) - f64::from(p[1])).abs() < 1e-6,
+            "point {i}"
+        );
+    }
+    let one_stage = dir.path().join("one.bmodel");
+    file.first_stage().save(&one_stage).unwrap();
+    let refused = dir.path().join("refused.ply");
+    let run = bounded_paths(&[
+        &"detect",
+        &cloud_path,
+        &"--model",
+        &one_stage,
+        &"--fast",
+        &"-o",
+        &refused,
+    ]);
+    assert!(!run.status.success());
+    assert!(stderr(&run).contains("one stage"), "{}", stderr(&run));
+    assert!(!refused.exists());
+
     // A second stage reading context this build does not compute is refused.
     let mut renamed = file.clone();
     renamed.second_stage.as_mut().unwrap().feature_names[12] = "ctx_unknown".into();

@@ -109,6 +109,14 @@ impl ModelFile {
         Ok(file)
     }
 
+    /// The first network alone (the whole model when it has one stage).
+    pub fn first_stage(&self) -> Self {
+        Self {
+            second_stage: None,
+            ..self.clone()
+        }
+    }
+
     /// The format version this file is written with: the oldest that holds it.
     pub fn format_version(&self) -> u32 {
         if self.second_stage.is_some() { 2 } else { 1 }

@@ -74,7 +74,9 @@ mod tests {
         assert_eq!(file.feature_names.len(), 12);
         assert_eq!(file.model.n_params(), 1595);
         assert_eq!(file.class_names, CLASS_NAMES);
-        let second = classifier.second_stage().expect("an auto-context second stage");
+        let second = classifier
+            .second_stage()
+            .expect("an auto-context second stage");
         assert_eq!(second.file().feature_names.len(), 12 + 4);
         assert_eq!(second.file().model.n_params(), 1787);
     }

@@ -16,7 +16,7 @@ use bounded_data::LabelledCloud;
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_features::{FeatureConfig, FeatureGroups, extract_in_context};
 use bounded_geom::{Class, PointCloud};
-use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, ModelFile, N_CLASSES};
+use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, N_CLASSES};
 use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -132,10 +132,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         "bounded bench".into(),
     )?;
     // The ablations are single-stage: the main model's first stage is their reference.
-    let first_stage = Classifier::from_file(ModelFile {
-        second_stage: None,
-        ..main_file.clone()
-    })?;
+    let first_stage = Classifier::from_file(main_file.first_stage())?;
     let classifier = Classifier::from_file(main_file)?;
 
     let train_full = train::feature_set(&training, &full, None, "features16")?;
