@@ -118,6 +118,7 @@ pub fn values_per_point(config: &FeatureConfig, in_context: bool) -> usize {
     config.scales.len() * (config.features_per_scale() + context)
 }
 
+/// [`extract`] or [`extract_in_context`], as `probabilities` are given.
 fn dense(
     cloud: &PointCloud,
     config: &FeatureConfig,
@@ -171,6 +172,7 @@ pub fn extract_chunks_in_context(
     chunks(cloud, config, Some(probabilities), chunk_points, f)
 }
 
+/// [`extract_chunks`] or [`extract_chunks_in_context`], as `probabilities` are given.
 fn chunks(
     cloud: &PointCloud,
     config: &FeatureConfig,
