@@ -56,20 +56,30 @@ fn train_with_custom_widths_writes_a_model_that_detect_uses() {
     assert_eq!(bounded_data::format::read(&out).unwrap().len(), n);
 }
 
+/// Runs `bounded detect cloud --model model [extra] -o out`.
+fn detect(cloud: &Path, model: &Path, extra: &[&str], out: &Path) -> Output {
+    let mut args: Vec<&dyn AsRef<OsStr>> = vec![&"detect", &cloud, &"--model", &model];
+    args.extend(extra.iter().map(|o| o as &dyn AsRef<OsStr>));
+    args.extend([&"-o" as &dyn AsRef<OsStr>, &out]);
+    bounded_paths(&args)
+}
+
+/// Asserts that the `p_sharp` column of the cloud at `path` is `expected`'s to 1e-6.
+fn assert_p_sharp(path: &Path, expected: &[[f32; 3]]) {
+    let table = bounded_data::format::read(path).unwrap();
+    let p_sharp = table.property("p_sharp").expect("p_sharp");
+    for (i, p) in expected.iter().enumerate() {
+        let d = (p_sharp.get_f64(i) - f64::from(p[1])).abs();
+        assert!(d < 1e-6, "{}: point {i} off by {d}", path.display());
+    }
+}
+
 #[test]
 fn a_context_model_labels_with_its_second_stage() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("context.bmodel");
-    let options = [
-        "--iterations",
-        "20",
-        "--runs",
-        "1",
-        "--scales",
-        "32,16",
-        "--context",
-    ];
-    let run = train(&model, &options);
+    let options = ["--iterations", "20", "--runs", "1", "--scales", "32,16"];
+    let run = train(&model, &[&options[..], &["--context"]].concat());
     assert!(run.status.success(), "{}", stderr(&run));
     let file = ModelFile::load(&model).unwrap();
     let second = file.second_stage.as_deref().expect("a second stage");
@@ -77,16 +87,10 @@ fn a_context_model_labels_with_its_second_stage() {
     assert_eq!(names[..12], FeatureGroups::BOUNDED.names());
     assert_eq!(names[12..], CONTEXT_NAMES);
 
+    // The library's way: first stage, its context, second stage.
     let cloud_path = dir.path().join("box.ply");
     let table = bounded_data::table::PointTable::new(common::box_cloud(2000, 4).cloud);
     bounded_data::format::write(&cloud_path, &table).unwrap();
-    let out = dir.path().join("out.ply");
-    let run = bounded_paths(&[&"detect", &cloud_path, &"--model", &model, &"-o", &out]);
-    assert!(run.status.success(), "{}", stderr(&run));
-    let labelled = bounded_data::format::read(&out).unwrap();
-    let p_sharp = labelled.property("p_sharp").expect("p_sharp");
-
-    // The same through the library: first stage, context, second stage.
     let cloud = bounded_data::format::read(&cloud_path).unwrap().cloud;
     let config = FeatureConfig {
         scales: vec![32, 16],
@@ -96,65 +100,42 @@ fn a_context_model_labels_with_its_second_stage() {
     let mut first = vec![[0f32; 3]; cloud.len()];
     let features = extract(&cloud, &config).unwrap();
     classifier.predict(features.as_slice(), &mut first).unwrap();
-    let mut expected = vec![[0f32; 3]; cloud.len()];
+    let mut second = vec![[0f32; 3]; cloud.len()];
     let features = extract_in_context(&cloud, &config, &first).unwrap();
-    let second = classifier.second_stage().unwrap();
-    second.predict(features.as_slice(), &mut expected).unwrap();
-    for (i, p) in expected.iter().enumerate() {
-        assert!(
-            (p_sharp.get_f64(i) - f64::from(p[1])).abs() < 1e-6,
-            "point {i}"
-        );
-    }
-    let changed = first.iter().zip(&expected).filter(|(a, b)| a != b).count();
-    assert!(changed > 0, "the second stage changed no probability");
+    let second_stage = classifier.second_stage().unwrap();
+    second_stage
+        .predict(features.as_slice(), &mut second)
+        .unwrap();
+    assert!(first != second, "the second stage changed no probability");
 
-    // --fast runs the first stage alone; a one-stage model has nothing to leave out.
-    let fast = dir.path().join("fast.ply");
-    let run = bounded_paths(&[
-        &"detect",
-        &cloud_path,
-        &"--model",
-        &model,
-        &"--fast",
-        &"-o",
-        &fast,
-    ]);
+    // detect gives the second stage's probabilities, --fast the first's.
+    let out = dir.path().join("out.ply");
+    let run = detect(&cloud_path, &model, &[], &out);
     assert!(run.status.success(), "{}", stderr(&run));
-    let fast = bounded_data::format::read(&fast).unwrap();
-    let fast_sharp = fast.property("p_sharp").expect("p_sharp");
-    for (i, p) in first.iter().enumerate() {
-        assert!(
-            (fast_sharp.get_f64(i) - f64::from(p[1])).abs() < 1e-6,
-            "point {i}"
-        );
-    }
+    assert_p_sharp(&out, &second);
+    let fast = dir.path().join("fast.ply");
+    let run = detect(&cloud_path, &model, &["--fast"], &fast);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_p_sharp(&fast, &first);
+
+    // Refused, nothing written: --fast with a one-stage model, a second stage reading
+    // context this build does not compute.
     let one_stage = dir.path().join("one.bmodel");
     file.first_stage().save(&one_stage).unwrap();
-    let refused = dir.path().join("refused.ply");
-    let run = bounded_paths(&[
-        &"detect",
-        &cloud_path,
-        &"--model",
-        &one_stage,
-        &"--fast",
-        &"-o",
-        &refused,
-    ]);
-    assert!(!run.status.success());
-    assert!(stderr(&run).contains("one stage"), "{}", stderr(&run));
-    assert!(!refused.exists());
-
-    // A second stage reading context this build does not compute is refused.
     let mut renamed = file.clone();
     renamed.second_stage.as_mut().unwrap().feature_names[12] = "ctx_unknown".into();
-    let bad = dir.path().join("renamed.bmodel");
-    renamed.save(&bad).unwrap();
-    let bad_out = dir.path().join("bad.ply");
-    let run = bounded_paths(&[&"detect", &cloud_path, &"--model", &bad, &"-o", &bad_out]);
-    assert!(!run.status.success());
-    assert!(stderr(&run).contains("ctx_unknown"), "{}", stderr(&run));
-    assert!(!bad_out.exists());
+    let unknown = dir.path().join("renamed.bmodel");
+    renamed.save(&unknown).unwrap();
+    for (model, extra, message) in [
+        (&one_stage, &["--fast"][..], "one stage"),
+        (&unknown, &[][..], "ctx_unknown"),
+    ] {
+        let refused = dir.path().join("refused.ply");
+        let run = detect(&cloud_path, model, extra, &refused);
+        assert!(!run.status.success());
+        assert!(stderr(&run).contains(message), "{}", stderr(&run));
+        assert!(!refused.exists());
+    }
 }
 
 #[test]
