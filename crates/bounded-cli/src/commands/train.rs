@@ -74,32 +74,41 @@ impl Widths {
     }
 }
 
-/// Computes the features of every cloud with `config`; with a `first` stage, each beside the
-/// context of the first stage's probabilities (for a second stage).
+/// Computes the features of every cloud with `config`; given a first stage's `probabilities`
+/// (every cloud's points in turn), each beside their context (for a second stage).
 pub fn feature_set(
     clouds: &[(String, LabelledCloud)],
     config: &FeatureConfig,
-    first: Option<&Classifier>,
+    probabilities: Option<&[[f32; N_CLASSES]]>,
     step: &str,
 ) -> Result<FeatureSet> {
     let total = clouds.iter().map(|(_, c)| c.cloud.len()).sum::<usize>();
     let bar = progress::bar(step, total as u64, "points");
-    let per_point = values_per_point(config, first.is_some());
+    if let Some(p) = probabilities
+        && p.len() != total
+    {
+        bail!(
+            "{} first-stage probabilities for {total} training points",
+            p.len()
+        );
+    }
+    let per_point = values_per_point(config, probabilities.is_some());
     let mut set = FeatureSet {
         features: Vec::with_capacity(total * per_point),
         labels: Vec::with_capacity(total),
         per_point,
-        in_context: first.is_some(),
+        in_context: probabilities.is_some(),
     };
     for (name, labelled) in clouds {
         let cloud = &labelled.cloud;
-        let mut features = extract(cloud, config).with_context(|| name.clone())?;
-        if let Some(first) = first {
-            let mut probabilities = vec![[0f32; N_CLASSES]; cloud.len()];
-            first.predict(features.as_slice(), &mut probabilities)?;
-            features =
-                extract_in_context(cloud, config, &probabilities).with_context(|| name.clone())?;
+        let features = match probabilities {
+            None => extract(cloud, config),
+            Some(all) => {
+                let first = set.labels.len();
+                extract_in_context(cloud, config, &all[first..first + cloud.len()])
+            }
         }
+        .with_context(|| name.clone())?;
         set.features.extend_from_slice(features.as_slice());
         set.labels.extend(labelled.labels.iter().map(|&c| c as u8));
         bar.inc(cloud.len() as u64);
@@ -182,13 +191,14 @@ pub fn fit_stages(
     let t = Instant::now();
     let file = fit(&set, config, schedule, widths, command.clone())?;
     seconds.training += t.elapsed().as_secs_f64();
-    drop(set);
     if !context {
         return Ok((file, seconds));
     }
     let t = Instant::now();
-    let first = Classifier::from_file(file.clone())?;
-    let set = feature_set(clouds, config, Some(&first), "context")?;
+    let mut probabilities = vec![[0f32; N_CLASSES]; set.len()];
+    Classifier::from_file(file.clone())?.predict(&set.features, &mut probabilities)?;
+    drop(set);
+    let set = feature_set(clouds, config, Some(&probabilities), "context")?;
     seconds.features += t.elapsed().as_secs_f64();
     let t = Instant::now();
     let second = fit(&set, config, schedule, widths, command)?;
