@@ -41,3 +41,31 @@ fn embedded_model_beats_the_published_pcednet_on_the_default_set() {
     // PCEDNet-2c's published median on these models is 0.402.
     assert!(mcc > 0.402, "median MCC {mcc}");
 }
+
+/// `eval` scores what `detect` would label with the same options: `--fast` (the first network
+/// alone) scores Default lower than both networks, and `--scales` equal to the model's own
+/// changes nothing while other scales change the result.
+#[test]
+fn eval_scores_the_first_stage_alone_and_other_scales() {
+    let Some(dir) = dataset("default") else {
+        return;
+    };
+    let eval = |extra: &[&str]| {
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"eval", &"--data", &dir];
+        args.extend(extra.iter().map(|a| a as &dyn AsRef<std::ffi::OsStr>));
+        let run = bounded_paths(&args);
+        assert!(run.status.success(), "{extra:?}: {}", stderr(&run));
+        String::from_utf8_lossy(&run.stdout).into_owned()
+    };
+    let both = eval(&[]);
+    let fast = eval(&["--fast"]);
+    // The full bench gives 0.633 for both networks and 0.455 for the first alone.
+    assert!(
+        median_mcc(&both) > median_mcc(&fast) + 0.05,
+        "two stages {} vs first stage {}",
+        median_mcc(&both),
+        median_mcc(&fast)
+    );
+    assert_eq!(eval(&["--scales", "128,64,32,16"]), both);
+    assert_ne!(eval(&["--scales", "96,48,24,12"]), both);
+}

@@ -151,6 +151,12 @@ pub struct EvalArgs {
     /// Positive class of the scores.
     #[arg(long, value_enum, default_value_t = PositiveArg::Sharp)]
     pub positive: PositiveArg,
+    /// Neighbourhood sizes, largest first, overriding the model's (as `detect --scales`).
+    #[arg(long, value_delimiter = ',')]
+    pub scales: Option<Vec<usize>>,
+    /// Score the first network of a two-stage model alone (as `detect --fast`).
+    #[arg(long)]
+    pub fast: bool,
 }
 
 /// The positive class of binary scores.

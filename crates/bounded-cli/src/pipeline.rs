@@ -38,6 +38,18 @@ impl Detection {
     }
 }
 
+/// The networks to run: all of `classifier`'s, or with `fast` its first stage alone (an
+/// error for a one-stage model, where `--fast` would silently change nothing).
+pub fn stages(classifier: Classifier, fast: bool) -> Result<Classifier> {
+    match (fast, classifier.second_stage()) {
+        (false, _) => Ok(classifier),
+        (true, Some(_)) => Ok(Classifier::from_file(classifier.file().first_stage())?),
+        (true, None) => {
+            bail!("--fast leaves out a model's second stage, but this model has one stage")
+        }
+    }
+}
+
 /// The feature extraction a model was trained with, with its scales optionally replaced by
 /// `scales` (same count).
 pub fn feature_config(classifier: &Classifier, scales: Option<&[usize]>) -> Result<FeatureConfig> {

@@ -8,7 +8,6 @@ use bounded_data::DataError;
 use bounded_data::format::{self, Format};
 use bounded_data::table::PointTable;
 use bounded_geom::{GeomError, PointCloud};
-use bounded_nn::Classifier;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -16,14 +15,7 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on unknown formats and unusable outputs before any work is done.
     let outputs = output_paths(args)?;
-    let classifier = sources::model(args.model.as_deref())?;
-    let classifier = match (args.fast, classifier.second_stage()) {
-        (false, _) => classifier,
-        (true, Some(_)) => Classifier::from_file(classifier.file().first_stage())?,
-        (true, None) => {
-            bail!("--fast leaves out a model's second stage, but this model has one stage")
-        }
-    };
+    let classifier = pipeline::stages(sources::model(args.model.as_deref())?, args.fast)?;
     let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
 
     let mut tables = Vec::with_capacity(args.inputs.len());

@@ -194,8 +194,8 @@ pub fn confusion_table(results: &[ModelResult]) -> String {
 
 pub fn run(args: &EvalArgs) -> Result<()> {
     let start = Instant::now();
-    let classifier = sources::model(args.model.as_deref())?;
-    let config = pipeline::feature_config(&classifier, None)?;
+    let classifier = pipeline::stages(sources::model(args.model.as_deref())?, args.fast)?;
+    let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
     let smooth = if args.smooth_as_sharp {
         Class::Sharp
     } else {
