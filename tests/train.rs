@@ -1,6 +1,6 @@
 //! `bounded train` on a small generated set: the model file records the requested network,
-//! `detect` runs with it (a two-stage one's second stage too), and a bad width fails before
-//! any work.
+//! `detect` runs with it (a two-stage one's second stage too), the noise options reach the
+//! generated sets, and a bad width or noise level fails before any work.
 
 mod common;
 
@@ -139,15 +139,58 @@ fn a_context_model_labels_with_its_second_stage() {
 }
 
 #[test]
-fn a_zero_width_is_refused_before_training() {
+fn noise_options_reach_the_generated_training_sets() {
+    let dir = tempfile::tempdir().unwrap();
+    let hash = |name: &str, noise: &[&str]| {
+        let model = dir.path().join(name);
+        let mut options = vec!["--iterations", "5", "--runs", "1"];
+        options.extend(noise);
+        let run = train(&model, &options);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let file = ModelFile::load(&model).unwrap();
+        assert!(file.provenance.command.contains(&noise.join(" ")));
+        file.provenance.data_hash
+    };
+    let default = hash("default.bmodel", &[]);
+    let clean = hash("clean.bmodel", &["--noise", "0"]);
+    let normal = hash(
+        "normal.bmodel",
+        &["--noise", "1", "--noise-along", "normal"],
+    );
+    let any = hash("any.bmodel", &["--noise", "1"]);
+    assert_eq!(
+        default,
+        hash("again.bmodel", &[]),
+        "the data is reproducible"
+    );
+    for (a, b) in [(clean, normal), (clean, any), (normal, any)] {
+        assert_ne!(a, b, "other noise, other training data");
+    }
+}
+
+#[test]
+fn bad_options_are_refused_before_training() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("bad.bmodel");
-    let run = train(&model, &["--hidden-widths", "16,0"]);
-    assert!(!run.status.success());
-    assert!(
-        stderr(&run).contains("hidden widths must be positive"),
-        "{}",
-        stderr(&run)
-    );
-    assert!(!model.exists());
+    let labelled = dir.path().join("labelled");
+    std::fs::create_dir(&labelled).unwrap();
+    for (run, expected) in [
+        (
+            train(&model, &["--hidden-widths", "16,0"]),
+            "hidden widths must be positive",
+        ),
+        (train(&model, &["--noise", "0.2,-1"]), "--noise"),
+        (
+            // A directory is used as it is: noise options there would do nothing.
+            bounded_paths(&[
+                &"train", &"--data", &labelled, &"--noise", &"0.5", &"-o", &model,
+            ]),
+            "apply to generated sets",
+        ),
+    ] {
+        let err = stderr(&run);
+        assert!(!run.status.success());
+        assert!(err.contains(expected) && !err.contains("panicked"), "{err}");
+        assert!(!model.exists());
+    }
 }

@@ -116,6 +116,9 @@ pub struct TrainArgs {
     /// clouds; detection then takes about twice as long.
     #[arg(long)]
     pub context: bool,
+    /// The noise of the generated sets among `--data` (directories are used as they are).
+    #[command(flatten)]
+    pub noise: NoiseArgs,
 }
 
 /// A feature group on the command line.
@@ -183,8 +186,15 @@ pub struct GenerateArgs {
     /// Number of shapes.
     #[arg(long)]
     pub shapes: Option<usize>,
+    #[command(flatten)]
+    pub noise: NoiseArgs,
+}
+
+/// The noise of generated clouds (`generate`, and `train`'s generated sets).
+#[derive(Debug, Args)]
+pub struct NoiseArgs {
     /// Noise levels, each shape drawing one: standard deviations as multiples of the cloud's
-    /// median point spacing (default 0,0.1,0.2,0.4,0.6).
+    /// median point spacing (default 0,0.1,0.2,0.4,0.6; repeat a level to draw it more often).
     #[arg(long, value_delimiter = ',')]
     pub noise: Option<Vec<f64>>,
     /// Which way the noise moves points.

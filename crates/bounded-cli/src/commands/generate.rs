@@ -1,11 +1,11 @@
 //! `bounded generate`: write a synthetic labelled set as binary PLY files.
 
 use super::sources;
-use crate::cli::{GenerateArgs, NoiseAlong};
+use crate::cli::GenerateArgs;
 use crate::progress;
 use anyhow::{Context, Result};
 use bounded_data::format;
-use bounded_data::synth::{NoiseDirection, SetConfig, generate_one};
+use bounded_data::synth::{SetConfig, generate_one};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -13,14 +13,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
     let start = Instant::now();
     let kind = sources::set_kind(&args.kind)?;
     let mut config = SetConfig::new(kind, args.seed, args.shapes.unwrap_or(60));
-    if let Some(levels) = &args.noise {
-        config.noise_levels.clone_from(levels);
-    }
-    config.noise_direction = match args.noise_along {
-        NoiseAlong::Any => NoiseDirection::Isotropic,
-        NoiseAlong::Normal => NoiseDirection::Normal,
-    };
-    config.validate().context("--noise")?;
+    sources::set_noise(&mut config, &args.noise)?;
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
     let bar = progress::bar("generate", config.shapes as u64, "clouds");

@@ -1,10 +1,11 @@
 //! Where clouds, labels and models come from: files, dataset directories, generated sets and
 //! the embedded default model.
 
+use crate::cli::{NoiseAlong, NoiseArgs};
 use anyhow::{Context, Result, bail};
 use bounded_data::dataset::{Manifest, Role, cloud_files};
 use bounded_data::labels::{self, Convention};
-use bounded_data::synth::{self, SetConfig, SetKind};
+use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_data::{LabelledCloud, format};
 use bounded_geom::Class;
 use bounded_nn::Classifier;
@@ -104,11 +105,25 @@ pub fn generated_config(spec: &str) -> Result<SetConfig> {
     Ok(SetConfig::new(set_kind(kind)?, seed, shapes))
 }
 
+/// Sets the noise of generated clouds from the command line's options (checked).
+pub fn set_noise(config: &mut SetConfig, noise: &NoiseArgs) -> Result<()> {
+    if let Some(levels) = &noise.noise {
+        config.noise_levels.clone_from(levels);
+    }
+    config.noise_direction = match noise.noise_along {
+        NoiseAlong::Any => NoiseDirection::Isotropic,
+        NoiseAlong::Normal => NoiseDirection::Normal,
+    };
+    config.validate().context("--noise")
+}
+
 /// The named clouds of one training source: a dataset directory (train and validation
-/// roles) or a generated set.
-pub fn training_clouds(source: &str) -> Result<Vec<(String, LabelledCloud)>> {
+/// roles) or a generated set, with `noise`.
+pub fn training_clouds(source: &str, noise: &NoiseArgs) -> Result<Vec<(String, LabelledCloud)>> {
     if source.starts_with("generated:") {
-        return Ok(synth::generate(&generated_config(source)?)?);
+        let mut config = generated_config(source)?;
+        set_noise(&mut config, noise)?;
+        return Ok(synth::generate(&config)?);
     }
     dataset_files(Path::new(source), &[Role::Train, Role::Validation])?
         .into_iter()

@@ -1,7 +1,7 @@
 //! `bounded train`: features of labelled clouds, computed once, then the classifier.
 
 use super::sources;
-use crate::cli::{FeatureGroupArg, TrainArgs};
+use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
 use crate::{atomic, progress};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
@@ -243,11 +243,19 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     };
     // A bad width fails now, not after the features.
     widths.model(&config, args.context).validate()?;
+    // A bad generated set or noise option fails now too.
+    match args.data.iter().find(|s| s.starts_with("generated:")) {
+        Some(spec) => sources::set_noise(&mut sources::generated_config(spec)?, &args.noise)?,
+        None if args.noise.noise.is_some() || args.noise.noise_along != NoiseAlong::Any => {
+            bail!("--noise and --noise-along apply to generated sets, and --data names none")
+        }
+        None => {}
+    }
     let mut clouds = Vec::new();
     for source in &args.data {
         let loading = progress::spinner("load");
         loading.set_message(source.clone());
-        let loaded = sources::training_clouds(source);
+        let loaded = sources::training_clouds(source, &args.noise);
         loading.finish_and_clear();
         clouds.extend(loaded?);
     }
