@@ -112,10 +112,15 @@ pub fn extract_in_context(
     dense(cloud, config, Some(probabilities))
 }
 
+/// Values per scale of an extraction, with or without context.
+pub fn values_per_scale(config: &FeatureConfig, in_context: bool) -> usize {
+    let context = if in_context { CONTEXT_PER_SCALE } else { 0 };
+    config.features_per_scale() + context
+}
+
 /// Values per point of an extraction, with or without context.
 pub fn values_per_point(config: &FeatureConfig, in_context: bool) -> usize {
-    let context = if in_context { CONTEXT_PER_SCALE } else { 0 };
-    config.scales.len() * (config.features_per_scale() + context)
+    config.scales.len() * values_per_scale(config, in_context)
 }
 
 /// [`extract`] or [`extract_in_context`], as `probabilities` are given.

@@ -60,5 +60,5 @@ pub use context::{CONTEXT_NAMES, CONTEXT_PER_SCALE};
 pub use error::FeatureError;
 pub use extract::{
     DEFAULT_CHUNK_POINTS, FeatureBlock, Features, extract, extract_chunks,
-    extract_chunks_in_context, extract_in_context, values_per_point,
+    extract_chunks_in_context, extract_in_context, values_per_point, values_per_scale,
 };

@@ -117,18 +117,48 @@ pub fn set_noise(config: &mut SetConfig, noise: &NoiseArgs) -> Result<()> {
     config.validate().context("--noise")
 }
 
-/// The named clouds of one training source: a dataset directory (train and validation
-/// roles) or a generated set, with `noise`.
-pub fn training_clouds(source: &str, noise: &NoiseArgs) -> Result<Vec<(String, LabelledCloud)>> {
-    if source.starts_with("generated:") {
-        let mut config = generated_config(source)?;
-        set_noise(&mut config, noise)?;
-        return Ok(synth::generate(&config)?);
+/// One source of training clouds, parsed and checked before any work.
+pub enum TrainingSource {
+    /// A generated set, with its noise.
+    Generated(SetConfig),
+    /// A dataset directory (its train and validation roles).
+    Dataset(PathBuf),
+}
+
+impl TrainingSource {
+    /// Parses every `--data` spec with the noise options; noise options without a
+    /// generated set are refused, as they would do nothing.
+    pub fn parse_all(specs: &[String], noise: &NoiseArgs) -> Result<Vec<TrainingSource>> {
+        let sources = specs
+            .iter()
+            .map(|spec| {
+                if !spec.starts_with("generated:") {
+                    return Ok(TrainingSource::Dataset(PathBuf::from(spec)));
+                }
+                let mut config = generated_config(spec)?;
+                set_noise(&mut config, noise)?;
+                Ok(TrainingSource::Generated(config))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let generated = sources
+            .iter()
+            .any(|s| matches!(s, TrainingSource::Generated(_)));
+        if !generated && (noise.noise.is_some() || noise.noise_along != NoiseAlong::Any) {
+            bail!("--noise and --noise-along apply to generated sets, and --data names none");
+        }
+        Ok(sources)
     }
-    dataset_files(Path::new(source), &[Role::Train, Role::Validation])?
-        .into_iter()
-        .map(|path| Ok((stem(&path), labelled(&path, Class::NonEdge)?)))
-        .collect()
+
+    /// The named clouds of this source.
+    pub fn load(&self) -> Result<Vec<(String, LabelledCloud)>> {
+        match self {
+            TrainingSource::Generated(config) => Ok(synth::generate(config)?),
+            TrainingSource::Dataset(dir) => dataset_files(dir, &[Role::Train, Role::Validation])?
+                .into_iter()
+                .map(|path| Ok((stem(&path), labelled(&path, Class::NonEdge)?)))
+                .collect(),
+        }
+    }
 }
 
 #[cfg(test)]

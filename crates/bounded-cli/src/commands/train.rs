@@ -1,13 +1,13 @@
 //! `bounded train`: features of labelled clouds, computed once, then the classifier.
 
-use super::sources;
-use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
+use super::sources::TrainingSource;
+use crate::cli::{FeatureGroupArg, TrainArgs};
 use crate::{atomic, progress};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_features::{
-    CONTEXT_NAMES, CONTEXT_PER_SCALE, FeatureConfig, FeatureGroups, extract, extract_in_context,
-    values_per_point,
+    CONTEXT_NAMES, FeatureConfig, FeatureGroups, extract, extract_in_context, values_per_point,
+    values_per_scale,
 };
 use bounded_nn::{Classifier, Dataset, ModelConfig, ModelFile, N_CLASSES, TrainConfig, train};
 use std::io::Write;
@@ -67,8 +67,7 @@ impl Widths {
     /// The network for `config`'s features, `in_context` of a first stage or not, with these
     /// widths.
     pub fn model(&self, config: &FeatureConfig, in_context: bool) -> ModelConfig {
-        let context = if in_context { CONTEXT_PER_SCALE } else { 0 };
-        ModelConfig::new(config.scales.len(), config.features_per_scale() + context)
+        ModelConfig::new(config.scales.len(), values_per_scale(config, in_context))
             .with_fusion_widths(self.fusion.clone())
             .with_hidden_widths(self.hidden.clone())
     }
@@ -244,18 +243,12 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     // A bad width fails now, not after the features.
     widths.model(&config, args.context).validate()?;
     // A bad generated set or noise option fails now too.
-    match args.data.iter().find(|s| s.starts_with("generated:")) {
-        Some(spec) => sources::set_noise(&mut sources::generated_config(spec)?, &args.noise)?,
-        None if args.noise.noise.is_some() || args.noise.noise_along != NoiseAlong::Any => {
-            bail!("--noise and --noise-along apply to generated sets, and --data names none")
-        }
-        None => {}
-    }
+    let sources = TrainingSource::parse_all(&args.data, &args.noise)?;
     let mut clouds = Vec::new();
-    for source in &args.data {
+    for (source, spec) in sources.iter().zip(&args.data) {
         let loading = progress::spinner("load");
-        loading.set_message(source.clone());
-        let loaded = sources::training_clouds(source, &args.noise);
+        loading.set_message(spec.clone());
+        let loaded = source.load();
         loading.finish_and_clear();
         clouds.extend(loaded?);
     }
