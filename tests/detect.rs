@@ -228,6 +228,20 @@ fn directory_outputs_refuse_clashing_or_replacing_outputs() {
     );
     fails(&[&"detect", &a, &b, &"-o", &a], "this is a file");
     assert!(!dir.path().join("out").exists(), "nothing created");
+    // A run that fails after the checks (a missing input) leaves no directory behind either.
+    let missing = dir.path().join("missing.ply");
+    fails(
+        &[&"detect", &a, &missing, &"-o", &dir.path().join("new/out")],
+        "missing.ply",
+    );
+    assert!(
+        !dir.path().join("new").exists(),
+        "failed run created its output directory"
+    );
+    fails(
+        &[&"detect", &a, &missing, &"-o", &a.join("under_a_file")],
+        "is not a directory",
+    );
 
     // One input to a path ending in a separator: a directory, created.
     let into = format!("{}/", dir.path().join("single").display());

@@ -14,7 +14,7 @@ use std::time::Instant;
 pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on unknown formats and unusable outputs before any work is done.
-    let outputs = output_paths(args)?;
+    let (outputs, into_directory) = output_paths(args)?;
     let classifier = pipeline::stages(sources::model(args.model.as_deref())?, args.fast)?;
     let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
 
@@ -39,6 +39,10 @@ pub fn run(args: &DetectArgs) -> Result<()> {
         names.join(", ")
     })?;
 
+    if into_directory {
+        std::fs::create_dir_all(&args.output)
+            .with_context(|| format!("cannot create {}", args.output.display()))?;
+    }
     let writing = progress::spinner("write");
     // Each table's results are the next `len` of the joined run.
     let written = (tables.iter().zip(&outputs)).try_fold(0, |first, (table, output)| {
@@ -110,11 +114,13 @@ fn joined(tables: &[PointTable]) -> Result<PointCloud> {
     })?)
 }
 
-/// Where each input's result goes: `--output` for one input, unless it is a directory (or
-/// ends with a separator); else a file of the input's name in that directory, which is
-/// created. Checked before any work: known formats, an existing parent, no two inputs to one
-/// file, no input replaced by another's result.
-fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
+/// Where each input's result goes, and whether into a directory: `--output` for one input,
+/// unless it is a directory (or ends with a separator); else a file of the input's name in
+/// that directory, which is created only when the results are written, so a failed run
+/// leaves nothing behind. Checked before any work: known formats, an existing parent (for a
+/// directory, its nearest existing ancestor is a directory), no two inputs to one file, no
+/// input replaced by another's result.
+fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
     let output = &args.output;
     let names_directory =
         output.is_dir() || (output.to_str()).is_some_and(|s| s.ends_with(std::path::is_separator));
@@ -133,7 +139,7 @@ fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
         if !parent.is_dir() {
             bail!("{}: output directory does not exist", parent.display());
         }
-        return Ok(vec![output.clone()]);
+        return Ok((vec![output.clone()], false));
     }
     if output.exists() && !output.is_dir() {
         bail!(
@@ -170,7 +176,15 @@ fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
         }
         outputs.push(path);
     }
-    std::fs::create_dir_all(output)
-        .with_context(|| format!("cannot create {}", output.display()))?;
-    Ok(outputs)
+    let existing = (output.ancestors())
+        .find(|a| a.as_os_str().is_empty() || a.exists())
+        .filter(|a| !a.as_os_str().is_empty());
+    if let Some(file) = existing.filter(|a| !a.is_dir()) {
+        bail!(
+            "cannot create {}: {} is not a directory",
+            output.display(),
+            file.display()
+        );
+    }
+    Ok((outputs, true))
 }
