@@ -1,4 +1,4 @@
-//! `bounded generate`: noise levels and direction from the command line; bad levels refused.
+//! `bounded generate`: noise levels and direction from the command line; bad options refused.
 
 mod common;
 
@@ -63,17 +63,19 @@ fn noise_levels_and_direction_move_the_same_points() {
 }
 
 #[test]
-fn negative_or_non_finite_noise_is_refused_before_any_file() {
-    for level in ["-1", "nan", "inf"] {
+fn bad_noise_or_no_shapes_is_refused_before_any_file() {
+    for (option, named) in [
+        ("--noise=-1", "--noise"),
+        ("--noise=nan", "--noise"),
+        ("--noise=inf", "--noise"),
+        ("--shapes=0", "--shapes"),
+    ] {
         let root = tempfile::tempdir().unwrap();
         let out = root.path().join("set");
-        let run = bounded_paths(&[&"generate", &"-o", &out, &format!("--noise={level}")]);
+        let run = bounded_paths(&[&"generate", &"-o", &out, &option]);
         let err = stderr(&run);
-        assert!(!run.status.success(), "{level}: accepted");
-        assert!(
-            err.contains("--noise") && !err.contains("panicked"),
-            "{err}"
-        );
-        assert!(!out.exists(), "{level}: {} created", out.display());
+        assert!(!run.status.success(), "{option}: accepted");
+        assert!(err.contains(named) && !err.contains("panicked"), "{err}");
+        assert!(!out.exists(), "{option}: {} created", out.display());
     }
 }

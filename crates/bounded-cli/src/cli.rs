@@ -1,6 +1,7 @@
 //! Command-line arguments.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::num::NonZeroUsize;
 use std::path::PathBuf;
 
 /// Find sharp edges and boundaries in 3D point clouds, from positions alone.
@@ -183,9 +184,9 @@ pub struct GenerateArgs {
     /// Seed: the same seed gives the same files.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Number of shapes.
+    /// Number of shapes (default 60).
     #[arg(long)]
-    pub shapes: Option<usize>,
+    pub shapes: Option<NonZeroUsize>,
     #[command(flatten)]
     pub noise: NoiseArgs,
 }

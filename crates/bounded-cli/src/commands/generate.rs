@@ -7,12 +7,13 @@ use anyhow::{Context, Result};
 use bounded_data::format;
 use bounded_data::synth::{SetConfig, generate_one};
 use rayon::prelude::*;
+use std::num::NonZeroUsize;
 use std::time::Instant;
 
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let start = Instant::now();
     let kind = sources::set_kind(&args.kind)?;
-    let mut config = SetConfig::new(kind, args.seed, args.shapes.unwrap_or(60));
+    let mut config = SetConfig::new(kind, args.seed, args.shapes.map_or(60, NonZeroUsize::get));
     sources::set_noise(&mut config, &args.noise)?;
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
