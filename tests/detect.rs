@@ -180,6 +180,23 @@ fn tiles_are_labelled_as_one_cloud_without_seams() {
         assert!(run.status.success(), "{}", stderr(&run));
         apart.extend(classes(&out));
     }
+    // `--separate` labels them apart in one run.
+    let run = bounded_paths(&[
+        &"detect",
+        &"--separate",
+        &tiles[0],
+        &tiles[1],
+        &"-o",
+        &path("separate"),
+        &"--format",
+        &"ply",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let separate: Vec<f64> = [path("separate/left.ply"), path("separate/right.ply")]
+        .iter()
+        .flat_map(|p| classes(p))
+        .collect();
+    assert_eq!(separate, apart, "--separate differs from one run per tile");
     let spacing = 0.02 * (cut - all.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min));
     let at_cut = |labels: &[f64]| {
         (both.iter().zip(labels))

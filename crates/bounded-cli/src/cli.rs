@@ -50,7 +50,7 @@ pub enum Command {
 pub struct DetectArgs {
     /// Input clouds (.ply .pcd .xyz .txt .csv .las .laz .e57). Several (the tiles of a
     /// survey, say) are labelled as one cloud, so neighbourhoods reach across their seams,
-    /// and written one output each.
+    /// and written one output each; `--separate` labels each on its own.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Output cloud (.ply .pcd .xyz .txt .csv .las .laz .e57; the format follows the
@@ -78,6 +78,11 @@ pub struct DetectArgs {
     /// file; the output holds the other points.
     #[arg(long)]
     pub drop_non_finite: bool,
+    /// Label each input as a cloud of its own (separate objects or scans, even where their
+    /// coordinates overlap), one after another, instead of all as one cloud. A failure stops
+    /// at that input; the outputs written before it stay.
+    #[arg(long)]
+    pub separate: bool,
 }
 
 /// Arguments of `train`.

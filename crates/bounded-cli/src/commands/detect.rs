@@ -1,15 +1,19 @@
-//! `bounded detect`: label every point of a cloud file, or of several files as one cloud.
+//! `bounded detect`: label every point of a cloud file, or of several files as one cloud
+//! (or each on its own with `--separate`).
 
 use super::{peak_memory, rate, sources};
 use crate::cli::DetectArgs;
-use crate::{pipeline, progress};
+use crate::pipeline::{self, Detection};
+use crate::progress;
 use anyhow::{Context, Result, bail};
 use bounded_data::DataError;
 use bounded_data::format::{self, Format};
 use bounded_data::table::PointTable;
+use bounded_features::FeatureConfig;
 use bounded_geom::{GeomError, PointCloud};
+use bounded_nn::Classifier;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
@@ -18,43 +22,33 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let classifier = pipeline::stages(sources::model(args.model.as_deref())?, args.fast)?;
     let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
 
-    let mut tables = Vec::with_capacity(args.inputs.len());
-    for input in &args.inputs {
-        let mut table = read(input, args.drop_non_finite)?;
-        // The output replaces them: free their memory while the cloud is labelled.
-        format::drop_annotated(&mut table);
-        tables.push(table);
+    // The inputs labelled together: all of them (tiles of one cloud), or each on its own.
+    let all: Vec<usize> = (0..args.inputs.len()).collect();
+    let groups: Vec<&[usize]> = if args.separate {
+        all.chunks(1).collect()
+    } else {
+        vec![&all[..]]
+    };
+    let (mut n, mut counts, mut detecting) = (0, [0; 3], Duration::ZERO);
+    for group in groups {
+        let group_inputs: Vec<&Path> = group.iter().map(|&i| args.inputs[i].as_path()).collect();
+        let group_outputs: Vec<&Path> = group.iter().map(|&i| outputs[i].as_path()).collect();
+        let detection = label(
+            &group_inputs,
+            &group_outputs,
+            into_directory.then_some(&*args.output),
+            args,
+            &classifier,
+            &config,
+        )?;
+        n += detection.classes.len();
+        for (total, count) in counts.iter_mut().zip(detection.class_counts()) {
+            *total += count;
+        }
+        detecting += detection.elapsed;
     }
-    let n: usize = tables.iter().map(PointTable::len).sum();
-    let detection = match tables.as_slice() {
-        [table] => pipeline::detect(&table.cloud, &classifier, &config, true),
-        _ => pipeline::detect(&joined(&tables)?, &classifier, &config, true),
-    }
-    .with_context(|| {
-        let names: Vec<_> = args
-            .inputs
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect();
-        names.join(", ")
-    })?;
 
-    if into_directory {
-        std::fs::create_dir_all(&args.output)
-            .with_context(|| format!("cannot create {}", args.output.display()))?;
-    }
-    let writing = progress::spinner("write");
-    // Each table's results are the next `len` of the joined run.
-    let written = (tables.iter().zip(&outputs)).try_fold(0, |first, (table, output)| {
-        let range = first..first + table.len();
-        let classes = &detection.classes[range.clone()];
-        let probabilities = &detection.probabilities[range.clone()];
-        format::write_annotated(output, table, classes, probabilities).map(|()| range.end)
-    });
-    writing.finish_and_clear();
-    written?;
-
-    let [non_edge, sharp, boundary] = detection.class_counts();
+    let [non_edge, sharp, boundary] = counts;
     let seconds = start.elapsed().as_secs_f64();
     let memory = peak_memory().map_or(String::new(), |m| format!(", peak memory {m}"));
     let wrote = match outputs.as_slice() {
@@ -64,10 +58,53 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     eprintln!(
         "{n} points: {sharp} sharp edge, {boundary} boundary, {non_edge} non-edge; \
          detection {:.2} s ({}), total {seconds:.2} s{memory}; wrote {wrote}",
-        detection.elapsed.as_secs_f64(),
-        rate(n, detection.elapsed.as_secs_f64()),
+        detecting.as_secs_f64(),
+        rate(n, detecting.as_secs_f64()),
     );
     Ok(())
+}
+
+/// Reads `inputs`, labels them as one cloud and writes each one's result to its output
+/// (creating `directory` first, if given, so a failed run leaves none behind).
+fn label(
+    inputs: &[&Path],
+    outputs: &[&Path],
+    directory: Option<&Path>,
+    args: &DetectArgs,
+    classifier: &Classifier,
+    config: &FeatureConfig,
+) -> Result<Detection> {
+    let mut tables = Vec::with_capacity(inputs.len());
+    for input in inputs {
+        let mut table = read(input, args.drop_non_finite)?;
+        // The output replaces them: free their memory while the cloud is labelled.
+        format::drop_annotated(&mut table);
+        tables.push(table);
+    }
+    let detection = match tables.as_slice() {
+        [table] => pipeline::detect(&table.cloud, classifier, config, true),
+        _ => pipeline::detect(&joined(&tables)?, classifier, config, true),
+    }
+    .with_context(|| {
+        let names: Vec<_> = inputs.iter().map(|p| p.display().to_string()).collect();
+        names.join(", ")
+    })?;
+
+    if let Some(directory) = directory {
+        std::fs::create_dir_all(directory)
+            .with_context(|| format!("cannot create {}", directory.display()))?;
+    }
+    let writing = progress::spinner("write");
+    // Each table's results are the next `len` of the joined run.
+    let written = (tables.iter().zip(outputs)).try_fold(0, |first, (table, output)| {
+        let range = first..first + table.len();
+        let classes = &detection.classes[range.clone()];
+        let probabilities = &detection.probabilities[range.clone()];
+        format::write_annotated(output, table, classes, probabilities).map(|()| range.end)
+    });
+    writing.finish_and_clear();
+    written?;
+    Ok(detection)
 }
 
 /// Reads `input` with every property; with `drop_non_finite`, leaves out (and reports) the
