@@ -18,52 +18,80 @@ pub const CONTEXT_NAMES: [&str; CONTEXT_PER_SCALE] = [
     "ctx_sharp_excess",
 ];
 
-/// The context of one neighbourhood. `row` holds the query point first, then its neighbours
-/// by increasing distance; `probabilities` are a first classifier's (non-edge, sharp,
-/// boundary) per cloud point. Returns:
+/// The context of a point's neighbourhood at every scale. `row` holds the query point first,
+/// then its neighbours by increasing distance (at least `scales[0]` of them); `scales` are
+/// neighbour counts, strictly descending, each neighbourhood a prefix of `row`;
+/// `probabilities` are a first classifier's (non-edge, sharp, boundary) per cloud point.
+/// Calls `put(scale index, values)` with, per scale:
 /// - the mean sharp and the mean boundary probability over the neighbourhood;
 /// - the distance from the query point to the sharp-probability-weighted centroid, over the
 ///   neighbourhood's radius (small in the middle of a band of sharp points, near 1 at its
 ///   rim; 1 when the neighbourhood holds almost no sharp probability);
 /// - the query point's sharp probability minus the neighbourhood's mean.
 ///
-/// Unit-free, so it does not change when the cloud is moved, rotated or scaled.
-pub(crate) fn context(
+/// One pass over the largest neighbourhood serves every scale: the sums run from the query
+/// point outwards and are read off as each smaller prefix ends. Unit-free, so it does not
+/// change when the cloud is moved, rotated or scaled.
+pub(crate) fn contexts(
     points: &[[f32; 3]],
     row: &[u32],
+    scales: &[usize],
     probabilities: &[[f32; 3]],
-) -> [f32; CONTEXT_PER_SCALE] {
+    mut put: impl FnMut(usize, [f32; CONTEXT_PER_SCALE]),
+) {
     let x = points[row[0] as usize];
     let offset = |j: u32| {
         let y = points[j as usize];
         [0, 1, 2].map(|a| f64::from(y[a]) - f64::from(x[a]))
     };
     let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    let radius = norm(offset(row[row.len() - 1]));
+    let own = f64::from(probabilities[row[0] as usize][1]);
     let (mut sharp, mut boundary) = (0.0f64, 0.0f64);
     let mut centroid = [0.0f64; 3];
-    for &j in row {
-        let p = probabilities[j as usize];
-        sharp += f64::from(p[1]);
-        boundary += f64::from(p[2]);
-        let d = offset(j);
-        for a in 0..3 {
-            centroid[a] += f64::from(p[1]) * d[a];
+    let mut summed = 0;
+    // Smallest scale first, so each prefix extends the last.
+    for (scale, &k) in scales.iter().enumerate().rev() {
+        for &j in &row[summed..k] {
+            let p = probabilities[j as usize];
+            sharp += f64::from(p[1]);
+            boundary += f64::from(p[2]);
+            let d = offset(j);
+            for a in 0..3 {
+                centroid[a] += f64::from(p[1]) * d[a];
+            }
         }
+        summed = k;
+        let radius = norm(offset(row[k - 1]));
+        let centroid_offset = if sharp > 1e-3 && radius > 0.0 {
+            norm(centroid) / (sharp * radius)
+        } else {
+            1.0
+        };
+        let n = k as f64;
+        put(
+            scale,
+            [sharp / n, boundary / n, centroid_offset, own - sharp / n].map(|v| v as f32),
+        );
     }
-    let k = row.len() as f64;
-    let centroid_offset = if sharp > 1e-3 && radius > 0.0 {
-        norm(centroid) / (sharp * radius)
-    } else {
-        1.0
-    };
-    let own = f64::from(probabilities[row[0] as usize][1]);
-    [sharp / k, boundary / k, centroid_offset, own - sharp / k].map(|v| v as f32)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The context at each of `scales`, in `scales` order.
+    fn at_scales(
+        points: &[[f32; 3]],
+        row: &[u32],
+        scales: &[usize],
+        probabilities: &[[f32; 3]],
+    ) -> Vec<[f32; CONTEXT_PER_SCALE]> {
+        let mut out = vec![[f32::NAN; CONTEXT_PER_SCALE]; scales.len()];
+        contexts(points, row, scales, probabilities, |s, values| {
+            out[s] = values
+        });
+        out
+    }
 
     #[test]
     fn hand_computed_neighbourhood() {
@@ -80,16 +108,14 @@ mod tests {
             [0.2, 0.5, 0.3],
             [0.4, 0.0, 0.6],
         ];
-        let c = context(&points, &[0, 1, 2, 3], &probabilities);
-        // Sharp sum 1.7, boundary sum 1.0 over 4 points; weighted centroid (1, 1, 0), radius 4.
-        let expected = [0.425, 0.25, 2f32.sqrt() / (1.7 * 4.0), 0.2 - 0.425];
-        for (got, want) in c.iter().zip(expected) {
-            assert!((got - want).abs() < 1e-6, "{c:?} vs {expected:?}");
-        }
-        // Only the first two neighbours (a smaller scale): radius 1, centroid (1, 0, 0).
-        let c = context(&points, &[0, 1], &probabilities);
-        let expected = [0.6, 0.05, 1.0 / 1.2, 0.2 - 0.6];
-        for (got, want) in c.iter().zip(expected) {
+        let c = at_scales(&points, &[0, 1, 2, 3], &[4, 2], &probabilities);
+        let expected = [
+            // All four: sharp sum 1.7, boundary sum 1.0; weighted centroid (1, 1, 0), radius 4.
+            [0.425, 0.25, 2f32.sqrt() / (1.7 * 4.0), 0.2 - 0.425],
+            // The first two (the smaller scale): radius 1, centroid (1, 0, 0).
+            [0.6, 0.05, 1.0 / 1.2, 0.2 - 0.6],
+        ];
+        for (got, want) in c.iter().flatten().zip(expected.iter().flatten()) {
             assert!((got - want).abs() < 1e-6, "{c:?} vs {expected:?}");
         }
     }
@@ -109,12 +135,21 @@ mod tests {
             [0.0, 1.0, 0.0],
             [1.0, 0.0, 0.0],
         ];
-        let c = context(&points, &[0, 1, 2, 3], &band);
-        assert_eq!(c, [0.75, 0.0, 0.0, 0.25]);
+        let row = [0, 1, 2, 3];
+        assert_eq!(
+            at_scales(&points, &row, &[4], &band),
+            [[0.75, 0.0, 0.0, 0.25]]
+        );
         // No sharp probability anywhere: offset 1, the rim value.
         let flat = [[1.0, 0.0, 0.0]; 4];
-        assert_eq!(context(&points, &[0, 1, 2, 3], &flat), [0.0, 0.0, 1.0, 0.0]);
+        assert_eq!(
+            at_scales(&points, &row, &[4], &flat),
+            [[0.0, 0.0, 1.0, 0.0]]
+        );
         // A neighbourhood of the query alone stays finite.
-        assert_eq!(context(&points, &[0], &band), [1.0, 0.0, 1.0, 0.0]);
+        assert_eq!(
+            at_scales(&points, &row, &[1], &band),
+            [[1.0, 0.0, 1.0, 0.0]]
+        );
     }
 }

@@ -3,7 +3,7 @@
 use bounded_geom::{Distinct, GeomError, KnnIndex, PointCloud};
 use rayon::prelude::*;
 
-use crate::context::{CONTEXT_PER_SCALE, context};
+use crate::context::{CONTEXT_PER_SCALE, contexts};
 use crate::local::{LANES, Scratch, group_features};
 use crate::{FeatureConfig, FeatureError};
 
@@ -274,15 +274,22 @@ fn extract_indexed(
                 .zip(plain.par_chunks(features))
                 .zip(chunk.rows().par_chunks(k0))
                 .for_each(|((out, features), row)| {
-                    let scales = out.chunks_exact_mut(per_scale + CONTEXT_PER_SCALE);
-                    for ((out, &k), features) in scales
-                        .zip(&config.scales)
-                        .zip(features.chunks_exact(per_scale))
+                    let stride = per_scale + CONTEXT_PER_SCALE;
+                    for (out, features) in
+                        (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale))
                     {
-                        let (own, context_out) = out.split_at_mut(per_scale);
-                        own.copy_from_slice(features);
-                        context_out.copy_from_slice(&context(points, &row[..k], probabilities));
+                        out[..per_scale].copy_from_slice(features);
                     }
+                    contexts(
+                        points,
+                        row,
+                        &config.scales,
+                        probabilities,
+                        |scale, values| {
+                            let at = scale * stride + per_scale;
+                            out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
+                        },
+                    );
                 });
         }
         f(&block);
