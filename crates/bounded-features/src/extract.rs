@@ -268,13 +268,13 @@ fn extract_indexed(
             );
         if let Some(probabilities) = probabilities {
             let per_scale = config.features_per_scale();
+            let stride = values_per_scale(config, true);
             block
                 .values
                 .par_chunks_mut(block.per_point)
                 .zip(plain.par_chunks(features))
                 .zip(chunk.rows().par_chunks(k0))
                 .for_each(|((out, features), row)| {
-                    let stride = per_scale + CONTEXT_PER_SCALE;
                     for (out, features) in
                         (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale))
                     {

@@ -23,19 +23,14 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
 
     // The inputs labelled together: all of them (tiles of one cloud), or each on its own.
-    let all: Vec<usize> = (0..args.inputs.len()).collect();
-    let groups: Vec<&[usize]> = if args.separate {
-        all.chunks(1).collect()
-    } else {
-        vec![&all[..]]
-    };
+    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    let written_to: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
+    let group = if args.separate { 1 } else { inputs.len() };
     let (mut n, mut counts, mut detecting) = (0, [0; 3], Duration::ZERO);
-    for group in groups {
-        let group_inputs: Vec<&Path> = group.iter().map(|&i| args.inputs[i].as_path()).collect();
-        let group_outputs: Vec<&Path> = group.iter().map(|&i| outputs[i].as_path()).collect();
+    for (group_inputs, group_outputs) in inputs.chunks(group).zip(written_to.chunks(group)) {
         let detection = label(
-            &group_inputs,
-            &group_outputs,
+            group_inputs,
+            group_outputs,
             into_directory.then_some(&*args.output),
             args,
             &classifier,
@@ -213,9 +208,7 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
         }
         outputs.push(path);
     }
-    let existing = (output.ancestors())
-        .find(|a| a.as_os_str().is_empty() || a.exists())
-        .filter(|a| !a.as_os_str().is_empty());
+    let existing = (output.ancestors()).find(|a| !a.as_os_str().is_empty() && a.exists());
     if let Some(file) = existing.filter(|a| !a.is_dir()) {
         bail!(
             "cannot create {}: {} is not a directory",
