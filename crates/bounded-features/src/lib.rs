@@ -54,6 +54,7 @@ mod context;
 mod error;
 mod extract;
 mod local;
+mod staged;
 
 pub use config::{DEFAULT_SCALES, FeatureConfig, FeatureGroups};
 pub use context::{CONTEXT_NAMES, CONTEXT_PER_SCALE};
@@ -62,3 +63,4 @@ pub use extract::{
     DEFAULT_CHUNK_POINTS, FeatureBlock, Features, extract, extract_chunks,
     extract_chunks_in_context, extract_in_context, values_per_point, values_per_scale,
 };
+pub use staged::{PENDING_CHUNKS, extract_chunks_staged};

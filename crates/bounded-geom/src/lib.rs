@@ -48,7 +48,7 @@ pub use cloud::PointCloud;
 pub use distinct::Distinct;
 pub use eigen::{Eigen3, Sym3, cross, dot, eigenvalues_batch};
 pub use error::GeomError;
-pub use knn::{KnnIndex, NeighbourChunk};
+pub use knn::{KnnIndex, KnnSearch, NeighbourChunk};
 pub use morton::morton_order;
 pub use rotation::rotation_of_quaternion;
 pub use smallest::SmallestFirst;

@@ -5,7 +5,7 @@
 //! smaller configuration's features exactly a subset), so the ablations cost only training.
 
 use super::eval::{self, MethodResults, ModelResult};
-use super::train::{self, FeatureSet, Schedule, Seconds, Widths};
+use super::train::{FitBars, training_clouds};
 use super::{rate, sources};
 use crate::cli::BenchArgs;
 use crate::peers;
@@ -14,9 +14,10 @@ use crate::{atomic, pipeline};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
-use bounded_features::{FeatureConfig, FeatureGroups, extract_in_context};
+use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::{Class, PointCloud};
-use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, ModelFile, N_CLASSES};
+use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths};
+use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, Detector, ModelFile};
 use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -142,14 +143,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
 
     // Timing of the default configuration, as the paper's timing table.
-    let (main_file, train_seconds) = train::fit_stages(
-        &training,
+    let mut bars = FitBars::new();
+    let (main_file, train_seconds) = fit::fit_stages(
+        &training_clouds(&training),
         &main,
         &schedule,
         &Widths::default(),
         true,
         "bounded bench".into(),
+        &mut |step| bars.show(step),
     )?;
+    bars.finish();
     if !args.quick {
         let _ = writeln!(
             report,
@@ -164,9 +168,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     // The ablations are single-stage: the main model's first stage is their reference.
     let first_stage = Classifier::from_file(main_file.first_stage())?;
-    let classifier = Classifier::from_file(main_file)?;
+    let detector = Detector::new(Classifier::from_file(main_file)?)?;
+    let ours_scorer = Scorer::Detector(&detector);
 
-    let train_full = train::feature_set(&training, &full, None, "features16")?;
+    let train_full = features(&training, &full)?;
     drop(training);
     let sets = [
         load_eval(&pcednet.join("default"), "default", &full)?,
@@ -178,7 +183,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // 1-2: main tables with peers, and our CA.
     let ca = CaBaseline::fit(&train_full, &full, &main);
     for set in &sets[..2] {
-        let ours = score(&classifier, &full, &main, set)?;
+        let ours = score(&ours_scorer, &full, set)?;
         let mut methods = vec![eval::as_method("BoundED-rs (ours)", &ours, Class::Sharp)];
         methods.push(ca.evaluate(set));
         let models: Vec<String> = set.clouds.iter().map(|c| c.name.clone()).collect();
@@ -206,8 +211,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
     // 3: timing.
     report.push_str(&timing_table(
-        &classifier,
-        &main,
+        &detector,
         &args.data,
         &train_seconds,
     )?);
@@ -221,7 +225,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             ablated = trained(&train_full, &full, target, &ablation_schedule, widths)?;
             &ablated
         };
-        ablation_row(label, model, &full, target, &sets)
+        let scorer = Scorer::Columns { model, target };
+        ablation_row(label, &scorer, &full, &sets)
     };
     report.push_str("## Feature ablation (4 scales)\n\n| features | Default MCC | Default F1 | ABC MCC | ABC F1 | noisy ABC MCC |\n|---|---|---|---|---|---|\n");
     for (label, groups) in feature_ablations() {
@@ -250,18 +255,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
         report.push_str(&ablation(&label, &main, &widths)?);
     }
-    let second = classifier.file().second_stage.as_deref();
+    let main_file = detector.classifier().file();
+    let second = main_file.second_stage.as_deref();
     let label = format!(
         "{:?} / {:?} and an auto-context second stage ({} parameters; the main model)",
         Widths::default().fusion,
         Widths::default().hidden,
-        classifier.file().model.n_params() + second.map_or(0, |f| f.model.n_params())
+        main_file.model.n_params() + second.map_or(0, |f| f.model.n_params())
     );
-    report.push_str(&ablation_row(&label, &classifier, &full, &main, &sets)?);
+    report.push_str(&ablation_row(&label, &ours_scorer, &full, &sets)?);
 
     // 5: noise and boundaries.
-    let clean = score(&classifier, &full, &main, &sets[1])?;
-    let noisy = score(&classifier, &full, &main, &sets[2])?;
+    let clean = score(&ours_scorer, &full, &sets[1])?;
+    let noisy = score(&ours_scorer, &full, &sets[2])?;
     let mcc = |r: &[ModelResult]| {
         eval::as_method("", r, Class::Sharp)
             .median()
@@ -285,7 +291,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     for (level, direction) in NOISE_SWEEP {
         let set = noise_eval(&full, level, direction)?;
         let (sweep_mcc, sweep_f1) =
-            eval::as_method("", &score(&classifier, &full, &main, &set)?, Class::Sharp)
+            eval::as_method("", &score(&ours_scorer, &full, &set)?, Class::Sharp)
                 .median()
                 .map_or((f64::NAN, f64::NAN), |s| (s.mcc, s.f1));
         let _ = writeln!(
@@ -295,7 +301,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     report.push('\n');
-    let boundary = score(&classifier, &full, &main, &sets[3])?;
+    let boundary = score(&ours_scorer, &full, &sets[3])?;
     let b = eval::as_method("BoundED-rs (ours)", &boundary, Class::Boundary);
     let _ = writeln!(
         report,
@@ -413,20 +419,6 @@ fn columns(full: &FeatureConfig, target: &FeatureConfig) -> Result<Vec<usize>> {
     Ok(columns)
 }
 
-/// The rows of `set` restricted to `columns`.
-fn select(set: &FeatureSet, columns: &[usize]) -> FeatureSet {
-    let mut features = Vec::with_capacity(set.len() * columns.len());
-    for row in set.features.chunks_exact(set.per_point) {
-        features.extend(columns.iter().map(|&c| row[c]));
-    }
-    FeatureSet {
-        features,
-        labels: set.labels.clone(),
-        per_point: columns.len(),
-        in_context: set.in_context,
-    }
-}
-
 fn trained(
     set: &FeatureSet,
     full: &FeatureConfig,
@@ -434,15 +426,26 @@ fn trained(
     schedule: &Schedule,
     widths: &Widths,
 ) -> Result<Classifier> {
-    let selected = select(set, &columns(full, target)?);
-    let file = train::fit(
+    let selected = set.select(&columns(full, target)?);
+    let mut bars = FitBars::new();
+    let file = fit::fit(
         &selected,
         target,
         schedule,
         widths,
         "bounded bench (ablation)".into(),
+        &mut |step| bars.show(step),
     )?;
+    bars.finish();
     Ok(Classifier::from_file(file)?)
+}
+
+/// The features of `clouds` at the full configuration, with a progress bar.
+fn features(clouds: &[(String, LabelledCloud)], full: &FeatureConfig) -> Result<FeatureSet> {
+    let mut bars = FitBars::new();
+    let set = fit::feature_set(&training_clouds(clouds), full, None, &mut |s| bars.show(s))?;
+    bars.finish();
+    Ok(set)
 }
 
 fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Result<Vec<Featured>> {
@@ -451,7 +454,7 @@ fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Resul
         .map(|(name, labelled)| {
             let truth = Class::codes(&labelled.labels);
             let one = [(name, labelled)];
-            let features = train::feature_set(&one, full, None, "features16")?;
+            let features = features(&one, full)?;
             let [(name, labelled)] = one;
             Ok(Featured {
                 name,
@@ -499,26 +502,27 @@ fn noise_eval(full: &FeatureConfig, level: f64, direction: NoiseDirection) -> Re
     })
 }
 
-/// Classifies every cloud of `set` with `model` (features `target`, selected from `full`; a
-/// second stage's context features computed anew).
-fn score(
-    model: &Classifier,
-    full: &FeatureConfig,
-    target: &FeatureConfig,
-    set: &EvalSet,
-) -> Result<Vec<ModelResult>> {
-    let columns = columns(full, target)?;
+/// What the bench scores: the main model through the library detector, or a one-stage
+/// ablation model over its columns of the precomputed features.
+enum Scorer<'a> {
+    Detector(&'a Detector),
+    Columns {
+        model: &'a Classifier,
+        target: &'a FeatureConfig,
+    },
+}
+
+/// Classifies every cloud of `set` with `scorer` (its features computed with `full`).
+fn score(scorer: &Scorer<'_>, full: &FeatureConfig, set: &EvalSet) -> Result<Vec<ModelResult>> {
     set.clouds
         .iter()
         .map(|c| {
-            let rows = select(&c.features, &columns).features;
-            let predicted = match model.second_stage() {
-                None => model.classify(&rows)?,
-                Some(second) => {
-                    let mut first = vec![[0f32; N_CLASSES]; c.cloud.len()];
-                    model.predict(&rows, &mut first)?;
-                    let context = extract_in_context(&c.cloud, target, &first)?;
-                    second.classify(context.as_slice())?
+            let predicted = match scorer {
+                Scorer::Detector(detector) => {
+                    detector.detect(&c.cloud).with_context(|| c.name.clone())?.codes()
+                }
+                Scorer::Columns { model, target } => {
+                    model.classify(&c.features.select(&columns(full, target)?).features)?
                 }
             };
             Ok(ModelResult {
@@ -531,16 +535,15 @@ fn score(
 
 fn ablation_row(
     label: &str,
-    model: &Classifier,
+    scorer: &Scorer<'_>,
     full: &FeatureConfig,
-    target: &FeatureConfig,
     sets: &[EvalSet],
 ) -> Result<String> {
     let mut row = format!("| {label} |");
     // Default and ABC: MCC and F1; noisy ABC: MCC, to show what each ablation does to the
     // noise gap.
     for (k, set) in sets[..3].iter().enumerate() {
-        let m = eval::as_method("", &score(model, full, target, set)?, Class::Sharp);
+        let m = eval::as_method("", &score(scorer, full, set)?, Class::Sharp);
         let s = m.median().context("empty evaluation set")?;
         let _ = write!(row, " {:.3} |", s.mcc);
         if k < 2 {
@@ -554,8 +557,7 @@ fn ablation_row(
 /// Timing of the default configuration: training preprocessing and training, then features
 /// and classification on each PCEDNet evaluation set (through the streaming detector).
 fn timing_table(
-    classifier: &Classifier,
-    main: &FeatureConfig,
+    detector: &Detector,
     data: &Path,
     train: &Seconds,
 ) -> Result<String> {
@@ -569,7 +571,7 @@ fn timing_table(
         let clouds = eval::load_set(&data.join("pcednet").join(key), Class::NonEdge)?;
         let (mut points, mut total, mut classification) = (0, 0.0, 0.0);
         for (name, labelled) in &clouds {
-            let d = pipeline::detect(&labelled.cloud, classifier, main, false)
+            let d = pipeline::detect(detector, &labelled.cloud, false)
                 .with_context(|| name.clone())?;
             points += labelled.cloud.len();
             total += d.elapsed.as_secs_f64();

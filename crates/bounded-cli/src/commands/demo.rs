@@ -1,7 +1,7 @@
 //! `bounded demo`: no files needed. A generated scene with creases, smooth parts and
 //! boundaries is labelled by the embedded model and scored against its exact labels.
 
-use super::{rate, render, sources};
+use super::{rate, render};
 use crate::cli::DemoArgs;
 use crate::pipeline;
 use crate::render::View;
@@ -66,9 +66,7 @@ pub fn scene(seed: u64) -> Result<LabelledCloud> {
 
 pub fn run(args: &DemoArgs) -> Result<()> {
     let scene = scene(args.seed)?;
-    let classifier = sources::model(None)?;
-    let config = pipeline::feature_config(&classifier, None)?;
-    let detection = pipeline::detect(&scene.cloud, &classifier, &config, true)?;
+    let detection = pipeline::detect(&pipeline::detector(None, None, false)?, &scene.cloud, true)?;
 
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;

@@ -1,17 +1,16 @@
 //! `bounded detect`: label every point of a cloud file, or of several files as one cloud
 //! (or each on its own with `--separate`).
 
-use super::{peak_memory, rate, sources};
+use super::{peak_memory, rate};
 use crate::cli::DetectArgs;
-use crate::pipeline::{self, Detection};
+use crate::pipeline;
 use crate::progress;
 use anyhow::{Context, Result, bail};
 use bounded_data::DataError;
 use bounded_data::format::{self, Format};
 use bounded_data::table::PointTable;
-use bounded_features::FeatureConfig;
 use bounded_geom::{GeomError, PointCloud};
-use bounded_nn::Classifier;
+use bounded_nn::{Detection, Detector};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -19,8 +18,7 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on unknown formats and unusable outputs before any work is done.
     let (outputs, into_directory) = output_paths(args)?;
-    let classifier = pipeline::stages(sources::model(args.model.as_deref())?, args.fast)?;
-    let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
+    let detector = pipeline::detector(args.model.as_deref(), args.scales.as_deref(), args.fast)?;
 
     // The inputs labelled together: all of them (tiles of one cloud), or each on its own.
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
@@ -33,8 +31,7 @@ pub fn run(args: &DetectArgs) -> Result<()> {
             group_outputs,
             into_directory.then_some(&*args.output),
             args,
-            &classifier,
-            &config,
+            &detector,
         )?;
         n += detection.classes.len();
         for (total, count) in counts.iter_mut().zip(detection.class_counts()) {
@@ -66,8 +63,7 @@ fn label(
     outputs: &[&Path],
     directory: Option<&Path>,
     args: &DetectArgs,
-    classifier: &Classifier,
-    config: &FeatureConfig,
+    detector: &Detector,
 ) -> Result<Detection> {
     let mut tables = Vec::with_capacity(inputs.len());
     for input in inputs {
@@ -77,8 +73,8 @@ fn label(
         tables.push(table);
     }
     let detection = match tables.as_slice() {
-        [table] => pipeline::detect(&table.cloud, classifier, config, true),
-        _ => pipeline::detect(&joined(&tables)?, classifier, config, true),
+        [table] => pipeline::detect(detector, &table.cloud, true),
+        _ => pipeline::detect(detector, &joined(&tables)?, true),
     }
     .with_context(|| {
         let names: Vec<_> = inputs.iter().map(|p| p.display().to_string()).collect();

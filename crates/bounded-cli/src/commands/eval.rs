@@ -8,9 +8,8 @@ use crate::{pipeline, progress};
 use anyhow::{Context, Result};
 use bounded_data::LabelledCloud;
 use bounded_data::dataset::Role;
-use bounded_features::FeatureConfig;
 use bounded_geom::Class;
-use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, Scores};
+use bounded_nn::{BinaryConfusion, ConfusionMatrix, Detector, Scores};
 use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -58,15 +57,14 @@ pub fn load_set(dir: &Path, smooth_edge: Class) -> Result<Vec<(String, LabelledC
 
 /// Classifies every cloud and compares with its labels.
 pub fn evaluate(
-    classifier: &Classifier,
-    config: &FeatureConfig,
+    detector: &Detector,
     clouds: &[(String, LabelledCloud)],
 ) -> Result<Vec<ModelResult>> {
     let bar = progress::bar("evaluate", clouds.len() as u64, "clouds");
     let results = clouds
         .iter()
         .map(|(name, labelled)| {
-            let detection = pipeline::detect(&labelled.cloud, classifier, config, false)
+            let detection = pipeline::detect(detector, &labelled.cloud, false)
                 .with_context(|| name.clone())?;
             let truth = Class::codes(&labelled.labels);
             bar.inc(1);
@@ -194,8 +192,7 @@ pub fn confusion_table(results: &[ModelResult]) -> String {
 
 pub fn run(args: &EvalArgs) -> Result<()> {
     let start = Instant::now();
-    let classifier = pipeline::stages(sources::model(args.model.as_deref())?, args.fast)?;
-    let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
+    let detector = pipeline::detector(args.model.as_deref(), args.scales.as_deref(), args.fast)?;
     let smooth = if args.smooth_as_sharp {
         Class::Sharp
     } else {
@@ -206,7 +203,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         PositiveArg::Boundary => Class::Boundary,
     };
     let clouds = load_set(&args.data, smooth)?;
-    let results = evaluate(&classifier, &config, &clouds)?;
+    let results = evaluate(&detector, &clouds)?;
     let ours = as_method("BoundED-rs", &results, positive);
     println!("{}", per_model_table(&ours));
     println!("{}", confusion_table(&results));

@@ -41,9 +41,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         ColourBy::Truth => sources::labelled(&args.input, Class::NonEdge)?.labels,
         ColourBy::Detect => {
-            let classifier = sources::model(None)?;
-            let config = pipeline::feature_config(&classifier, None)?;
-            pipeline::detect(&table.cloud, &classifier, &config, true)
+            let detector = pipeline::detector(None, None, false)?;
+            pipeline::detect(&detector, &table.cloud, true)
                 .with_context(|| args.input.display().to_string())?
                 .classes
         }

@@ -8,18 +8,7 @@ use bounded_data::labels::{self, Convention};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_data::{LabelledCloud, format};
 use bounded_geom::Class;
-use bounded_nn::Classifier;
 use std::path::{Path, PathBuf};
-
-/// The classifier in `path`, or the embedded default model.
-pub fn model(path: Option<&Path>) -> Result<Classifier> {
-    match path {
-        Some(p) => {
-            Classifier::load(p).with_context(|| format!("cannot load model {}", p.display()))
-        }
-        None => bounded_nn::default_model().context("cannot load the embedded model"),
-    }
-}
 
 /// The clouds of dataset `dir` that have `role`; a directory without roles (no
 /// `manifest.txt`, no `train/`, `validation/`, `evaluation/`) holds only clouds of that role.
