@@ -64,8 +64,8 @@ pub fn evaluate(
     let results = clouds
         .iter()
         .map(|(name, labelled)| {
-            let detection = pipeline::detect(detector, &labelled.cloud, false)
-                .with_context(|| name.clone())?;
+            let detection =
+                pipeline::detect(detector, &labelled.cloud, false).with_context(|| name.clone())?;
             let truth = Class::codes(&labelled.labels);
             bar.inc(1);
             Ok(ModelResult {
@@ -192,7 +192,12 @@ pub fn confusion_table(results: &[ModelResult]) -> String {
 
 pub fn run(args: &EvalArgs) -> Result<()> {
     let start = Instant::now();
-    let detector = pipeline::detector(args.model.as_deref(), args.scales.as_deref(), args.fast)?;
+    let detector = pipeline::detector(pipeline::ModelOptions {
+        model: args.model.as_deref(),
+        scales: args.scales.as_deref(),
+        fast: args.fast,
+        sensitivity: args.sensitivity,
+    })?;
     let smooth = if args.smooth_as_sharp {
         Class::Sharp
     } else {
