@@ -61,6 +61,14 @@ pub enum DataError {
         /// What is inconsistent.
         what: String,
     },
+    /// A picture could not be encoded as PNG.
+    #[error("{path}: cannot write the PNG picture: {source}")]
+    Png {
+        /// The picture file.
+        path: PathBuf,
+        /// The encoder's error.
+        source: png::EncodingError,
+    },
 }
 
 impl DataError {

@@ -9,10 +9,10 @@ use super::train::{FitBars, training_clouds};
 use super::{rate, sources};
 use crate::cli::BenchArgs;
 use crate::peers;
-use crate::plot::{self, PALETTE, Series};
 use crate::{atomic, pipeline};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
+use bounded_data::picture::{Canvas, PALETTE, Series, precision_recall};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::{Class, PointCloud};
@@ -210,11 +210,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
 
     // 3: timing.
-    report.push_str(&timing_table(
-        &detector,
-        &args.data,
-        &train_seconds,
-    )?);
+    report.push_str(&timing_table(&detector, &args.data, &train_seconds)?);
 
     // 4: ablations; the configuration of the main model reuses it instead of retraining.
     let ablation = |label: &str, target: &FeatureConfig, widths: &Widths| -> Result<String> {
@@ -518,9 +514,10 @@ fn score(scorer: &Scorer<'_>, full: &FeatureConfig, set: &EvalSet) -> Result<Vec
         .iter()
         .map(|c| {
             let predicted = match scorer {
-                Scorer::Detector(detector) => {
-                    detector.detect(&c.cloud).with_context(|| c.name.clone())?.codes()
-                }
+                Scorer::Detector(detector) => detector
+                    .detect(&c.cloud)
+                    .with_context(|| c.name.clone())?
+                    .codes(),
                 Scorer::Columns { model, target } => {
                     model.classify(&c.features.select(&columns(full, target)?).features)?
                 }
@@ -556,11 +553,7 @@ fn ablation_row(
 
 /// Timing of the default configuration: training preprocessing and training, then features
 /// and classification on each PCEDNet evaluation set (through the streaming detector).
-fn timing_table(
-    detector: &Detector,
-    data: &Path,
-    train: &Seconds,
-) -> Result<String> {
+fn timing_table(detector: &Detector, data: &Path, train: &Seconds) -> Result<String> {
     let mut out = format!(
         "## Timing (2 cores, CPU only)\n\nTraining (both stages): features {:.1} s, \
          training {:.1} s.\n\n| set | points | features + kNN s | classification s | points/s |\n\
@@ -571,8 +564,8 @@ fn timing_table(
         let clouds = eval::load_set(&data.join("pcednet").join(key), Class::NonEdge)?;
         let (mut points, mut total, mut classification) = (0, 0.0, 0.0);
         for (name, labelled) in &clouds {
-            let d = pipeline::detect(detector, &labelled.cloud, false)
-                .with_context(|| name.clone())?;
+            let d =
+                pipeline::detect(detector, &labelled.cloud, false).with_context(|| name.clone())?;
             points += labelled.cloud.len();
             total += d.elapsed.as_secs_f64();
             classification += d.classification.as_secs_f64();
@@ -589,7 +582,7 @@ fn timing_table(
 }
 
 /// A precision-recall scatter plot of the methods.
-fn pr_plot(title: &str, methods: &[MethodResults]) -> crate::canvas::Canvas {
+fn pr_plot(title: &str, methods: &[MethodResults]) -> Canvas {
     let series: Vec<Series> = methods
         .iter()
         .enumerate()
@@ -603,7 +596,7 @@ fn pr_plot(title: &str, methods: &[MethodResults]) -> crate::canvas::Canvas {
                 .collect(),
         })
         .collect();
-    plot::precision_recall(title, &series)
+    precision_recall(title, &series)
 }
 
 /// Our covariance-analysis baseline: a point is a sharp edge when its surface variation

@@ -64,8 +64,8 @@ pub fn evaluate(
     let results = clouds
         .iter()
         .map(|(name, labelled)| {
-            let detection = pipeline::detect(detector, &labelled.cloud, false)
-                .with_context(|| name.clone())?;
+            let detection =
+                pipeline::detect(detector, &labelled.cloud, false).with_context(|| name.clone())?;
             let truth = Class::codes(&labelled.labels);
             bar.inc(1);
             Ok(ModelResult {

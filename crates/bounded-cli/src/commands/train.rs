@@ -43,7 +43,10 @@ impl FitBars {
             }
             Step::Training(p) => {
                 let (_, bar) = self.bar.get_or_insert_with(|| {
-                    (true, progress::bar("train", (p.iterations * p.runs) as u64, "its"))
+                    (
+                        true,
+                        progress::bar("train", (p.iterations * p.runs) as u64, "its"),
+                    )
                 });
                 bar.inc(1);
                 if let Some(best) = p.best_val_loss {
