@@ -6,7 +6,6 @@
 mod atomic;
 mod cli;
 mod commands;
-mod peers;
 mod pipeline;
 mod progress;
 

@@ -14,6 +14,7 @@ pub mod format;
 pub mod labels;
 pub mod las;
 pub mod pcd;
+pub mod peers;
 pub mod picture;
 pub mod ply;
 pub mod synth;

@@ -3,11 +3,11 @@
 
 use super::sources;
 use crate::cli::{EvalArgs, PositiveArg};
-use crate::peers::{self, PeerResult};
 use crate::{pipeline, progress};
 use anyhow::{Context, Result};
 use bounded_data::LabelledCloud;
 use bounded_data::dataset::Role;
+use bounded_data::peers::{self, PeerResult};
 use bounded_geom::Class;
 use bounded_nn::{BinaryConfusion, ConfusionMatrix, Detector, Scores};
 use std::fmt::Write;
