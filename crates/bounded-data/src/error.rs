@@ -69,6 +69,14 @@ pub enum DataError {
         /// The encoder's error.
         source: png::EncodingError,
     },
+    /// A dataset directory that is missing or holds no clouds.
+    #[error("{path}: {what}")]
+    Dataset {
+        /// The directory.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
+    },
 }
 
 impl DataError {

@@ -5,8 +5,8 @@
 //! smaller configuration's features exactly a subset), so the ablations cost only training.
 
 use super::eval::{self, MethodResults, ModelResult};
+use super::rate;
 use super::train::{FitBars, training_clouds};
-use super::{rate, sources};
 use crate::cli::BenchArgs;
 use crate::{atomic, pipeline};
 use anyhow::{Context, Result, bail};
@@ -116,7 +116,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let shrink = if args.quick { 4 } else { 1 };
     let mut training = Vec::new();
     for source in TRAINING_SETS {
-        let mut config = sources::generated_config(source)?;
+        let mut config = SetConfig::from_spec(source)?;
         config.noise_levels = TRAINING_NOISE.to_vec();
         config.noise_direction = TRAINING_NOISE_ALONG;
         config.shapes /= shrink;

@@ -1,12 +1,11 @@
 //! `bounded eval`: scores of a model on labelled clouds, per model and as medians, with the
 //! published peers on the same models.
 
-use super::sources;
 use crate::cli::{EvalArgs, PositiveArg};
 use crate::{pipeline, progress};
 use anyhow::{Context, Result};
 use bounded_data::LabelledCloud;
-use bounded_data::dataset::Role;
+use bounded_data::dataset::{self, Role};
 use bounded_data::peers::{self, PeerResult};
 use bounded_geom::Class;
 use bounded_nn::{BinaryConfusion, ConfusionMatrix, Detector, Scores};
@@ -42,17 +41,13 @@ impl MethodResults {
 
 /// Reads the labelled evaluation clouds of `dir` (the evaluation role, or every cloud).
 pub fn load_set(dir: &Path, smooth_edge: Class) -> Result<Vec<(String, LabelledCloud)>> {
-    let files = sources::dataset_files(dir, &[Role::Evaluation])?;
-    let bar = progress::bar("load", files.len() as u64, "clouds");
-    let clouds = files
-        .iter()
-        .map(|path| {
-            bar.inc(1);
-            Ok((sources::stem(path), sources::labelled(path, smooth_edge)?))
-        })
-        .collect();
+    let bar = progress::bar("load", 0, "clouds");
+    let clouds = dataset::load(dir, &[Role::Evaluation], smooth_edge, &mut |done, all| {
+        bar.set_length(all as u64);
+        bar.set_position(done as u64);
+    });
     bar.finish_and_clear();
-    clouds
+    Ok(clouds?)
 }
 
 /// Classifies every cloud and compares with its labels.

@@ -6,7 +6,6 @@ mod detect;
 mod eval;
 mod generate;
 mod render;
-mod sources;
 mod train;
 
 use crate::cli::Command;

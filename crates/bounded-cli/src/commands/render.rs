@@ -1,12 +1,11 @@
 //! `bounded render`: a shaded picture of a cloud coloured by class.
 
-use super::sources;
 use crate::cli::{ColourBy, RenderArgs};
 use crate::pipeline;
 use anyhow::{Context, Result, bail};
-use bounded_data::format;
 use bounded_data::labels::{self, Convention};
 use bounded_data::picture::{View, render_classes};
+use bounded_data::{dataset, format};
 use bounded_geom::Class;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
@@ -32,7 +31,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             }
             labels::from_table(table.clone(), Convention::ClassProperty, &args.input)?.labels
         }
-        ColourBy::Truth => sources::labelled(&args.input, Class::NonEdge)?.labels,
+        ColourBy::Truth => dataset::read_labelled(&args.input, Class::NonEdge)?.labels,
         ColourBy::Detect => {
             let detector = pipeline::detector(None, None, false)?;
             pipeline::detect(&detector, &table.cloud, true)

@@ -1,10 +1,10 @@
 //! `bounded train`: features of labelled clouds, computed once, then the classifier.
 
-use super::sources::TrainingSource;
-use crate::cli::{FeatureGroupArg, TrainArgs};
+use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
 use crate::{atomic, progress};
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
+use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_nn::{ModelFile, N_CLASSES, Schedule, Step, TrainingCloud, Widths, fit_stages};
 use indicatif::ProgressBar;
@@ -118,7 +118,20 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     // A bad width fails now, not after the features.
     widths.model(&config, args.context).validate()?;
     // A bad generated set or noise option fails now too.
-    let sources = TrainingSource::parse_all(&args.data, &args.noise)?;
+    let noise = &args.noise;
+    let sources = (args.data.iter())
+        .map(|spec| match TrainingSource::parse(spec)? {
+            TrainingSource::Generated(config) => Ok(TrainingSource::Generated(
+                (config.with_noise(noise.noise.as_deref(), noise.noise_along.into()))
+                    .context("--noise")?,
+            )),
+            other => Ok(other),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let generated = (sources.iter()).any(|s| matches!(s, TrainingSource::Generated(_)));
+    if !generated && (noise.noise.is_some() || noise.noise_along != NoiseAlong::Any) {
+        bail!("--noise and --noise-along apply to generated sets, and --data names none");
+    }
     let mut clouds = Vec::new();
     for (source, spec) in sources.iter().zip(&args.data) {
         let loading = progress::spinner("load");
