@@ -13,7 +13,7 @@ use crate::{
     Classifier, Dataset, ModelConfig, ModelFile, N_CLASSES, NnError, Progress, TrainConfig, train,
 };
 
-/// A labelled cloud to train on.
+/// A labelled cloud to train on (or to evaluate, see [`crate::report::evaluate`]).
 #[derive(Debug, Clone, Copy)]
 pub struct TrainingCloud<'a> {
     /// Its name, for error messages.
@@ -154,7 +154,7 @@ pub fn feature_set(
         }
         .map_err(|source| NnError::Cloud {
             name: c.name.to_string(),
-            source,
+            source: Box::new(source.into()),
         })?;
         set.features.extend_from_slice(features.as_slice());
         set.labels.extend(c.labels.iter().map(|&l| l as u8));

@@ -43,6 +43,7 @@ pub mod inference;
 pub mod loss;
 pub mod metrics;
 pub mod model;
+pub mod report;
 mod standardisation;
 pub mod training;
 

@@ -1,84 +1,16 @@
 //! `bounded train`: features of labelled clouds, computed once, then the classifier.
 
+use super::training_clouds;
+use crate::atomic;
 use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
-use crate::{atomic, progress};
+use crate::progress::{self, FitBars};
 use anyhow::{Context, Result, bail};
-use bounded_data::LabelledCloud;
 use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
-use bounded_nn::{ModelFile, N_CLASSES, Schedule, Step, TrainingCloud, Widths, fit_stages};
-use indicatif::ProgressBar;
+use bounded_nn::{ModelFile, N_CLASSES, Schedule, Widths, fit_stages};
 use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
-
-/// A progress display for the library's fit steps: a bar for features, one for training.
-pub struct FitBars {
-    bar: Option<(bool, ProgressBar)>,
-}
-
-impl FitBars {
-    /// No bar yet.
-    pub fn new() -> Self {
-        Self { bar: None }
-    }
-
-    /// Shows `step`, starting a new bar when the step changes.
-    pub fn show(&mut self, step: Step<'_>) {
-        let training = matches!(step, Step::Training(_));
-        if self.bar.as_ref().is_some_and(|(t, _)| *t != training) {
-            self.finish();
-        }
-        match step {
-            Step::Features {
-                done,
-                total,
-                context,
-            } => {
-                let (_, bar) = self.bar.get_or_insert_with(|| {
-                    let name = if context { "context" } else { "features" };
-                    (false, progress::bar(name, total as u64, "points"))
-                });
-                bar.set_position(done as u64);
-            }
-            Step::Training(p) => {
-                let (_, bar) = self.bar.get_or_insert_with(|| {
-                    (
-                        true,
-                        progress::bar("train", (p.iterations * p.runs) as u64, "its"),
-                    )
-                });
-                bar.inc(1);
-                if let Some(best) = p.best_val_loss {
-                    bar.set_message(format!(
-                        "run {}/{} loss {:.4} best val {best:.4}",
-                        p.run + 1,
-                        p.runs,
-                        p.loss
-                    ));
-                }
-            }
-        }
-    }
-
-    /// Clears the current bar.
-    pub fn finish(&mut self) {
-        if let Some((_, bar)) = self.bar.take() {
-            bar.finish_and_clear();
-        }
-    }
-}
-
-/// The clouds as the library's training clouds.
-pub fn training_clouds(clouds: &[(String, LabelledCloud)]) -> Vec<TrainingCloud<'_>> {
-    (clouds.iter())
-        .map(|(name, c)| TrainingCloud {
-            name,
-            cloud: &c.cloud,
-            labels: &c.labels,
-        })
-        .collect()
-}
 
 /// Writes a model file atomically.
 pub fn save(file: &ModelFile, path: &Path) -> Result<()> {
