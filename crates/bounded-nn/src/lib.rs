@@ -34,6 +34,7 @@
 //! [`Classifier`] from the file.
 
 mod backend;
+pub mod baseline;
 pub mod data;
 pub mod detector;
 mod error;

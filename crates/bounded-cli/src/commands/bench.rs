@@ -15,7 +15,8 @@ use bounded_data::picture::{Canvas, PALETTE, Series, precision_recall};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::{Class, PointCloud};
-use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths};
+use bounded_nn::baseline::CaBaseline;
+use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths, columns};
 use bounded_nn::report::{
     self, MethodResults, ModelResult, confusion_table, medians_table, per_model_table, pooled,
 };
@@ -196,11 +197,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     ];
 
     // 1-2: main tables with peers, and our CA.
-    let ca = CaBaseline::fit(&train_full, &full, &main);
+    let ca = CaBaseline::fit(&train_full, &full, &main.scales)?;
     for set in &sets[..2] {
         let ours = score(&ours_scorer, &full, set)?;
         let mut methods = vec![MethodResults::of("BoundED-rs (ours)", &ours, Class::Sharp)];
-        methods.push(ca.evaluate(set));
+        methods.push(ca_results(&ca, set));
         let models: Vec<String> = set.clouds.iter().map(|c| c.name.clone()).collect();
         methods.extend(peer_methods(&peers, set.key, &models));
         let _ = writeln!(
@@ -216,7 +217,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
              The paper reports BoundED MCC 0.423 (Default, trained on Default) and 0.842 \
              (ABC, trained on ABC, all 7168 models).\n\n{}\n",
             peers_path.display(),
-            ca.describe(),
+            format_args!(
+                "CA-rs: surface variation at k = {} above {:.3} (fitted on the training set)",
+                ca.scale, ca.threshold
+            ),
             per_model_table(&methods[0])
         );
         let png = args.output.join(format!("pr_{}.png", set.key));
@@ -408,28 +412,6 @@ fn feature_ablations() -> Vec<(&'static str, FeatureGroups)> {
     ]
 }
 
-/// Column indices of `target`'s values within rows computed with `full`.
-fn columns(full: &FeatureConfig, target: &FeatureConfig) -> Result<Vec<usize>> {
-    let full_names = full.groups.names();
-    let per_scale = full_names.len();
-    let mut columns = Vec::new();
-    for scale in &target.scales {
-        let s = full
-            .scales
-            .iter()
-            .position(|k| k == scale)
-            .with_context(|| format!("scale {scale} is not among {:?}", full.scales))?;
-        for name in target.groups.names() {
-            let v = full_names
-                .iter()
-                .position(|n| *n == name)
-                .with_context(|| format!("feature {name} not computed"))?;
-            columns.push(s * per_scale + v);
-        }
-    }
-    Ok(columns)
-}
-
 fn trained(
     set: &FeatureSet,
     full: &FeatureConfig,
@@ -611,92 +593,22 @@ fn pr_plot(title: &str, methods: &[MethodResults]) -> Canvas {
     precision_recall(title, &series)
 }
 
-/// Our covariance-analysis baseline: a point is a sharp edge when its surface variation
-/// `lambda_min / (lambda_1 + lambda_2 + lambda_3)` at one scale exceeds a threshold; scale and
-/// threshold are the ones with the best MCC on the training set.
-struct CaBaseline {
-    column: [usize; 3],
-    scale: usize,
-    threshold: f32,
-}
-
-impl CaBaseline {
-    fn fit(train: &FeatureSet, full: &FeatureConfig, main: &FeatureConfig) -> Self {
-        let mut best = (
-            f64::MIN,
-            Self {
-                column: [0, 1, 2],
-                scale: full.scales[0],
-                threshold: 0.0,
-            },
-        );
-        let sigma_of = |scale: usize| {
-            let s = full.scales.iter().position(|&k| k == scale).unwrap_or(0);
-            let base = s * full.groups.count();
-            [base, base + 1, base + 2]
-        };
-        let truth: Vec<u8> = train.labels.iter().map(|&l| u8::from(l == 1)).collect();
-        for &scale in &main.scales {
-            let column = sigma_of(scale);
-            for step in 1..100 {
-                let candidate = Self {
-                    column,
-                    scale,
-                    threshold: step as f32 / 300.0,
-                };
-                let predicted = candidate.predict(train);
-                let mcc = BinaryConfusion::from_labels(&truth, &predicted, 1)
-                    .map_or(f64::MIN, |c| c.mcc());
-                if mcc > best.0 {
-                    best = (mcc, candidate);
-                }
-            }
-        }
-        best.1
-    }
-
-    fn variation(&self, row: &[f32]) -> f32 {
-        let l = self.column.map(|c| row[c]);
-        let sum = l[0] + l[1] + l[2];
-        if sum > 0.0 {
-            l[0].min(l[1]).min(l[2]) / sum
-        } else {
-            0.0
-        }
-    }
-
-    fn predict(&self, set: &FeatureSet) -> Vec<u8> {
-        set.features
-            .chunks_exact(set.per_point)
-            .map(|row| u8::from(self.variation(row) > self.threshold))
-            .collect()
-    }
-
-    fn evaluate(&self, set: &EvalSet) -> MethodResults {
-        MethodResults {
-            name: "CA-rs (surface variation, ours)".into(),
-            positive: "sharp".into(),
-            models: set
-                .clouds
-                .iter()
-                .map(|c| {
-                    let truth: Vec<u8> = (c.labels.iter())
-                        .map(|&l| u8::from(l == Class::Sharp))
-                        .collect();
-                    let predicted = self.predict(&c.features);
-                    let confusion =
-                        BinaryConfusion::from_labels(&truth, &predicted, 1).unwrap_or_default();
-                    (c.name.clone(), confusion)
-                })
-                .collect(),
-        }
-    }
-
-    fn describe(&self) -> String {
-        format!(
-            "CA-rs: surface variation at k = {} above {:.3} (fitted on the training set)",
-            self.scale, self.threshold
-        )
+/// The CA baseline's results on `set` (its features computed with the fit's configuration).
+fn ca_results(ca: &CaBaseline, set: &EvalSet) -> MethodResults {
+    MethodResults {
+        name: "CA-rs (surface variation, ours)".into(),
+        positive: "sharp".into(),
+        models: (set.clouds.iter())
+            .map(|c| {
+                let truth: Vec<u8> = (c.labels.iter())
+                    .map(|&l| u8::from(l == Class::Sharp))
+                    .collect();
+                let predicted = ca.predict(&c.features);
+                let confusion =
+                    BinaryConfusion::from_labels(&truth, &predicted, 1).unwrap_or_default();
+                (c.name.clone(), confusion)
+            })
+            .collect(),
     }
 }
 
