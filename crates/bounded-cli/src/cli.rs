@@ -1,5 +1,6 @@
 //! Command-line arguments.
 
+use bounded_data::synth::NoiseDirection;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
@@ -113,8 +114,9 @@ pub struct DetectArgs {
 /// Arguments of `train`.
 #[derive(Debug, Args)]
 pub struct TrainArgs {
-    /// Training data: directories of labelled clouds, or `generated:KIND:SEED[:SHAPES]` for a
-    /// synthetic set made on the fly. Repeat to combine.
+    /// Training data: directories of labelled clouds, `abc:DIR` for ABC models (OBJ meshes
+    /// beside their features YAML files), or `generated:KIND:SEED[:SHAPES]` for a synthetic
+    /// set made on the fly. Repeat to combine.
     #[arg(long, required = true)]
     pub data: Vec<String>,
     /// Output model file.
@@ -243,6 +245,15 @@ pub enum NoiseAlong {
     Any,
     /// The surface normal only (range noise of scanners, as in the noisy ABC sample).
     Normal,
+}
+
+impl From<NoiseAlong> for NoiseDirection {
+    fn from(along: NoiseAlong) -> Self {
+        match along {
+            NoiseAlong::Any => NoiseDirection::Isotropic,
+            NoiseAlong::Normal => NoiseDirection::Normal,
+        }
+    }
 }
 
 /// Arguments of `render`.

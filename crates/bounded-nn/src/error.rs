@@ -40,13 +40,13 @@ pub enum NnError {
     /// Feature extraction failed (bad scales, too few distinct positions).
     #[error(transparent)]
     Features(#[from] bounded_features::FeatureError),
-    /// Feature extraction failed on one of several clouds.
+    /// Work on one of several clouds failed (its features, its detection).
     #[error("{name}: {source}")]
     Cloud {
         /// The cloud's name.
         name: String,
         /// What failed.
-        source: bounded_features::FeatureError,
+        source: Box<NnError>,
     },
     /// A cloud smaller than the largest neighbourhood.
     #[error(

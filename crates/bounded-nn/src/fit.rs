@@ -13,7 +13,7 @@ use crate::{
     Classifier, Dataset, ModelConfig, ModelFile, N_CLASSES, NnError, Progress, TrainConfig, train,
 };
 
-/// A labelled cloud to train on.
+/// A labelled cloud to train on (or to evaluate, see [`crate::report::evaluate`]).
 #[derive(Debug, Clone, Copy)]
 pub struct TrainingCloud<'a> {
     /// Its name, for error messages.
@@ -61,6 +61,27 @@ impl FeatureSet {
             in_context: self.in_context,
         }
     }
+}
+
+/// Column indices of `target`'s values within rows computed with `full` (for
+/// [`FeatureSet::select`]): the nested neighbourhoods make a smaller configuration's features
+/// a subset of a larger one's, so ablations need no second feature pass. An error when
+/// `target` asks for a scale or feature that `full` lacks.
+pub fn columns(full: &FeatureConfig, target: &FeatureConfig) -> Result<Vec<usize>, NnError> {
+    let full_names = full.groups.names();
+    let per_scale = full_names.len();
+    let mut columns = Vec::new();
+    for scale in &target.scales {
+        let s = (full.scales.iter().position(|k| k == scale)).ok_or_else(|| {
+            NnError::InvalidConfig(format!("scale {scale} is not among {:?}", full.scales))
+        })?;
+        for name in target.groups.names() {
+            let v = (full_names.iter().position(|n| *n == name))
+                .ok_or_else(|| NnError::InvalidConfig(format!("feature {name} not computed")))?;
+            columns.push(s * per_scale + v);
+        }
+    }
+    Ok(columns)
 }
 
 /// How long and how often to train.
@@ -154,7 +175,7 @@ pub fn feature_set(
         }
         .map_err(|source| NnError::Cloud {
             name: c.name.to_string(),
-            source,
+            source: Box::new(source.into()),
         })?;
         set.features.extend_from_slice(features.as_slice());
         set.labels.extend(c.labels.iter().map(|&l| l as u8));
@@ -236,4 +257,47 @@ pub fn fit_stages(
     let second = fit(&set, config, schedule, widths, command, progress)?;
     seconds.training += t.elapsed().as_secs_f64();
     Ok((file.with_second_stage(second)?, seconds))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bounded_features::FeatureGroups;
+
+    #[test]
+    fn columns_of_a_smaller_configuration() {
+        // Per scale: sigma_1..3, d_perp, d_par.
+        let groups = FeatureGroups {
+            sigma: true,
+            sigma_u: false,
+            sigma_l: false,
+            d: true,
+            s: false,
+            c: false,
+        };
+        let full = FeatureConfig {
+            scales: vec![16, 8],
+            groups,
+        };
+        let d_only = FeatureGroups {
+            sigma: false,
+            ..groups
+        };
+        let target = |scales: Vec<usize>, groups| FeatureConfig { scales, groups };
+        assert_eq!(columns(&full, &target(vec![8], d_only)).unwrap(), [8, 9]);
+        assert_eq!(
+            columns(&full, &target(vec![16, 8], groups)).unwrap(),
+            (0..10).collect::<Vec<_>>()
+        );
+        let e = columns(&full, &target(vec![4], d_only)).unwrap_err();
+        assert!(
+            e.to_string().contains("scale 4 is not among [16, 8]"),
+            "{e}"
+        );
+        let e = columns(&full, &target(vec![8], FeatureGroups::BOUNDED)).unwrap_err();
+        assert!(
+            e.to_string().contains("feature sigma_u1 not computed"),
+            "{e}"
+        );
+    }
 }

@@ -38,6 +38,7 @@
 //! [`Classifier`] from the file.
 
 mod backend;
+pub mod baseline;
 pub mod calibration;
 pub mod data;
 pub mod detector;
@@ -48,6 +49,7 @@ pub mod inference;
 pub mod loss;
 pub mod metrics;
 pub mod model;
+pub mod report;
 mod standardisation;
 pub mod training;
 

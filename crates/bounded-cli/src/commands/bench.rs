@@ -4,20 +4,25 @@
 //! feature group; every table selects its columns from them (the nested kNN sets make a
 //! smaller configuration's features exactly a subset), so the ablations cost only training.
 
-use super::eval::{self, MethodResults, ModelResult};
-use super::train::{FitBars, training_clouds};
-use super::{rate, sources};
+use super::{load_set, peer_methods, rate, training_clouds};
 use crate::cli::BenchArgs;
-use crate::peers;
-use crate::plot::{self, PALETTE, Series};
+use crate::progress::FitBars;
 use crate::{atomic, pipeline};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
+use bounded_data::peers;
+use bounded_data::picture::{Canvas, PALETTE, Series, precision_recall};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::{Class, PointCloud};
-use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths};
-use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, Detector, ModelFile};
+use bounded_nn::baseline::CaBaseline;
+use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths, columns};
+use bounded_nn::report::{
+    self, MethodResults, ModelResult, confusion_table, medians_table, per_model_table, pooled,
+};
+use bounded_nn::{
+    BinaryConfusion, Classifier, ConfusionMatrix, Detector, ModelFile, TrainingCloud,
+};
 use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -70,8 +75,19 @@ struct Featured {
     name: String,
     /// The cloud, for a second stage's context features.
     cloud: PointCloud,
-    truth: Vec<u8>,
+    labels: Vec<Class>,
     features: FeatureSet,
+}
+
+impl Featured {
+    /// The labelled cloud, for the library's evaluation.
+    fn labelled(&self) -> TrainingCloud<'_> {
+        TrainingCloud {
+            name: &self.name,
+            cloud: &self.cloud,
+            labels: &self.labels,
+        }
+    }
 }
 
 /// One evaluation set.
@@ -116,7 +132,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let shrink = if args.quick { 4 } else { 1 };
     let mut training = Vec::new();
     for source in TRAINING_SETS {
-        let mut config = sources::generated_config(source)?;
+        let mut config = SetConfig::from_spec(source)?;
         config.noise_levels = TRAINING_NOISE.to_vec();
         config.noise_direction = TRAINING_NOISE_ALONG;
         config.shapes /= shrink;
@@ -181,19 +197,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     ];
 
     // 1-2: main tables with peers, and our CA.
-    let ca = CaBaseline::fit(&train_full, &full, &main);
+    let ca = CaBaseline::fit(&train_full, &full, &main.scales)?;
     for set in &sets[..2] {
         let ours = score(&ours_scorer, &full, set)?;
-        let mut methods = vec![eval::as_method("BoundED-rs (ours)", &ours, Class::Sharp)];
-        methods.push(ca.evaluate(set));
+        let mut methods = vec![MethodResults::of("BoundED-rs (ours)", &ours, Class::Sharp)];
+        methods.push(ca_results(&ca, set));
         let models: Vec<String> = set.clouds.iter().map(|c| c.name.clone()).collect();
-        methods.extend(eval::peer_methods(&peers, set.key, &models));
+        methods.extend(peer_methods(&peers, set.key, &models));
         let _ = writeln!(
             report,
             "## {} evaluation set ({} models): medians, sharp edge positive\n\n{}",
             set.key,
             set.clouds.len(),
-            eval::medians_table(&methods)
+            medians_table(&methods)
         );
         let _ = writeln!(
             report,
@@ -201,8 +217,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
              The paper reports BoundED MCC 0.423 (Default, trained on Default) and 0.842 \
              (ABC, trained on ABC, all 7168 models).\n\n{}\n",
             peers_path.display(),
-            ca.describe(),
-            eval::per_model_table(&methods[0])
+            format_args!(
+                "CA-rs: surface variation at k = {} above {:.3} (fitted on the training set)",
+                ca.scale, ca.threshold
+            ),
+            per_model_table(&methods[0])
         );
         let png = args.output.join(format!("pr_{}.png", set.key));
         pr_plot(&format!("{}: precision vs recall", set.key), &methods).save_png(&png)?;
@@ -265,7 +284,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let clean = score(&ours_scorer, &full, &sets[1])?;
     let noisy = score(&ours_scorer, &full, &sets[2])?;
     let mcc = |r: &[ModelResult]| {
-        eval::as_method("", r, Class::Sharp)
+        MethodResults::of("", r, Class::Sharp)
             .median()
             .map_or(f64::NAN, |s| s.mcc)
     };
@@ -287,7 +306,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     for (level, direction) in NOISE_SWEEP {
         let set = noise_eval(&full, level, direction)?;
         let (sweep_mcc, sweep_f1) =
-            eval::as_method("", &score(&ours_scorer, &full, &set)?, Class::Sharp)
+            MethodResults::of("", &score(&ours_scorer, &full, &set)?, Class::Sharp)
                 .median()
                 .map_or((f64::NAN, f64::NAN), |s| (s.mcc, s.f1));
         let _ = writeln!(
@@ -298,7 +317,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     report.push('\n');
     let boundary = score(&ours_scorer, &full, &sets[3])?;
-    let b = eval::as_method("BoundED-rs (ours)", &boundary, Class::Boundary);
+    let b = MethodResults::of("BoundED-rs (ours)", &boundary, Class::Boundary);
     let _ = writeln!(
         report,
         "## Boundaries (generated set, seed {}, {} clouds, never trained on)\n\n\
@@ -306,9 +325,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
          3-class confusion, all clouds:\n\n{}",
         BOUNDARY_EVAL.0,
         BOUNDARY_EVAL.1,
-        eval::medians_table(&[b]),
-        eval::pooled(&boundary).binary(Class::Boundary as u8).f1(),
-        eval::confusion_table(&boundary)
+        medians_table(&[b]),
+        pooled(&boundary).binary(Class::Boundary as u8).f1(),
+        confusion_table(&boundary)
     );
     let _ = writeln!(
         report,
@@ -393,28 +412,6 @@ fn feature_ablations() -> Vec<(&'static str, FeatureGroups)> {
     ]
 }
 
-/// Column indices of `target`'s values within rows computed with `full`.
-fn columns(full: &FeatureConfig, target: &FeatureConfig) -> Result<Vec<usize>> {
-    let full_names = full.groups.names();
-    let per_scale = full_names.len();
-    let mut columns = Vec::new();
-    for scale in &target.scales {
-        let s = full
-            .scales
-            .iter()
-            .position(|k| k == scale)
-            .with_context(|| format!("scale {scale} is not among {:?}", full.scales))?;
-        for name in target.groups.names() {
-            let v = full_names
-                .iter()
-                .position(|n| *n == name)
-                .with_context(|| format!("feature {name} not computed"))?;
-            columns.push(s * per_scale + v);
-        }
-    }
-    Ok(columns)
-}
-
 fn trained(
     set: &FeatureSet,
     full: &FeatureConfig,
@@ -448,14 +445,13 @@ fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Resul
     clouds
         .into_iter()
         .map(|(name, labelled)| {
-            let truth = Class::codes(&labelled.labels);
             let one = [(name, labelled)];
             let features = features(&one, full)?;
             let [(name, labelled)] = one;
             Ok(Featured {
                 name,
                 cloud: labelled.cloud,
-                truth,
+                labels: labelled.labels,
                 features,
             })
         })
@@ -466,7 +462,7 @@ fn load_eval(dir: &Path, key: &'static str, full: &FeatureConfig) -> Result<Eval
     if !dir.is_dir() {
         bail!("{}: evaluation set missing (see --data)", dir.display());
     }
-    let clouds = featured(eval::load_set(dir, Class::NonEdge)?, full)?;
+    let clouds = featured(load_set(dir, Class::NonEdge)?, full)?;
     Ok(EvalSet { key, clouds })
 }
 
@@ -510,21 +506,19 @@ enum Scorer<'a> {
 
 /// Classifies every cloud of `set` with `scorer` (its features computed with `full`).
 fn score(scorer: &Scorer<'_>, full: &FeatureConfig, set: &EvalSet) -> Result<Vec<ModelResult>> {
-    set.clouds
-        .iter()
+    let (model, target) = match scorer {
+        Scorer::Detector(detector) => {
+            let clouds: Vec<_> = set.clouds.iter().map(Featured::labelled).collect();
+            return Ok(report::evaluate(detector, &clouds, &mut |_, _| {})?);
+        }
+        Scorer::Columns { model, target } => (model, target),
+    };
+    (set.clouds.iter())
         .map(|c| {
-            let predicted = match scorer {
-                Scorer::Detector(detector) => detector
-                    .detect(&c.cloud)
-                    .with_context(|| c.name.clone())?
-                    .codes(),
-                Scorer::Columns { model, target } => {
-                    model.classify(&c.features.select(&columns(full, target)?).features)?
-                }
-            };
+            let predicted = model.classify(&c.features.select(&columns(full, target)?).features)?;
             Ok(ModelResult {
                 name: c.name.clone(),
-                matrix: ConfusionMatrix::from_labels(&c.truth, &predicted)?,
+                matrix: ConfusionMatrix::from_labels(&Class::codes(&c.labels), &predicted)?,
             })
         })
         .collect()
@@ -540,7 +534,7 @@ fn ablation_row(
     // Default and ABC: MCC and F1; noisy ABC: MCC, to show what each ablation does to the
     // noise gap.
     for (k, set) in sets[..3].iter().enumerate() {
-        let m = eval::as_method("", &score(scorer, full, set)?, Class::Sharp);
+        let m = MethodResults::of("", &score(scorer, full, set)?, Class::Sharp);
         let s = m.median().context("empty evaluation set")?;
         let _ = write!(row, " {:.3} |", s.mcc);
         if k < 2 {
@@ -561,7 +555,7 @@ fn timing_table(detector: &Detector, data: &Path, train: &Seconds) -> Result<Str
         train.features, train.training
     );
     for key in ["default", "abc"] {
-        let clouds = eval::load_set(&data.join("pcednet").join(key), Class::NonEdge)?;
+        let clouds = load_set(&data.join("pcednet").join(key), Class::NonEdge)?;
         let (mut points, mut total, mut classification) = (0, 0.0, 0.0);
         for (name, labelled) in &clouds {
             let d =
@@ -582,7 +576,7 @@ fn timing_table(detector: &Detector, data: &Path, train: &Seconds) -> Result<Str
 }
 
 /// A precision-recall scatter plot of the methods.
-fn pr_plot(title: &str, methods: &[MethodResults]) -> crate::canvas::Canvas {
+fn pr_plot(title: &str, methods: &[MethodResults]) -> Canvas {
     let series: Vec<Series> = methods
         .iter()
         .enumerate()
@@ -596,93 +590,25 @@ fn pr_plot(title: &str, methods: &[MethodResults]) -> crate::canvas::Canvas {
                 .collect(),
         })
         .collect();
-    plot::precision_recall(title, &series)
+    precision_recall(title, &series)
 }
 
-/// Our covariance-analysis baseline: a point is a sharp edge when its surface variation
-/// `lambda_min / (lambda_1 + lambda_2 + lambda_3)` at one scale exceeds a threshold; scale and
-/// threshold are the ones with the best MCC on the training set.
-struct CaBaseline {
-    column: [usize; 3],
-    scale: usize,
-    threshold: f32,
-}
-
-impl CaBaseline {
-    fn fit(train: &FeatureSet, full: &FeatureConfig, main: &FeatureConfig) -> Self {
-        let mut best = (
-            f64::MIN,
-            Self {
-                column: [0, 1, 2],
-                scale: full.scales[0],
-                threshold: 0.0,
-            },
-        );
-        let sigma_of = |scale: usize| {
-            let s = full.scales.iter().position(|&k| k == scale).unwrap_or(0);
-            let base = s * full.groups.count();
-            [base, base + 1, base + 2]
-        };
-        let truth: Vec<u8> = train.labels.iter().map(|&l| u8::from(l == 1)).collect();
-        for &scale in &main.scales {
-            let column = sigma_of(scale);
-            for step in 1..100 {
-                let candidate = Self {
-                    column,
-                    scale,
-                    threshold: step as f32 / 300.0,
-                };
-                let predicted = candidate.predict(train);
-                let mcc = BinaryConfusion::from_labels(&truth, &predicted, 1)
-                    .map_or(f64::MIN, |c| c.mcc());
-                if mcc > best.0 {
-                    best = (mcc, candidate);
-                }
-            }
-        }
-        best.1
-    }
-
-    fn variation(&self, row: &[f32]) -> f32 {
-        let l = self.column.map(|c| row[c]);
-        let sum = l[0] + l[1] + l[2];
-        if sum > 0.0 {
-            l[0].min(l[1]).min(l[2]) / sum
-        } else {
-            0.0
-        }
-    }
-
-    fn predict(&self, set: &FeatureSet) -> Vec<u8> {
-        set.features
-            .chunks_exact(set.per_point)
-            .map(|row| u8::from(self.variation(row) > self.threshold))
-            .collect()
-    }
-
-    fn evaluate(&self, set: &EvalSet) -> MethodResults {
-        MethodResults {
-            name: "CA-rs (surface variation, ours)".into(),
-            positive: "sharp".into(),
-            models: set
-                .clouds
-                .iter()
-                .map(|c| {
-                    let truth: Vec<u8> = c.truth.iter().map(|&l| u8::from(l == 1)).collect();
-                    let predicted = self.predict(&c.features);
-                    let confusion =
-                        BinaryConfusion::from_labels(&truth, &predicted, 1).unwrap_or_default();
-                    (c.name.clone(), confusion)
-                })
-                .collect(),
-        }
-    }
-
-    fn describe(&self) -> String {
-        format!(
-            "CA-rs: surface variation at k = {} above {:.3} (fitted on the training set)",
-            self.scale, self.threshold
-        )
+/// The CA baseline's results on `set` (its features computed with the fit's configuration).
+fn ca_results(ca: &CaBaseline, set: &EvalSet) -> MethodResults {
+    MethodResults {
+        name: "CA-rs (surface variation, ours)".into(),
+        positive: "sharp".into(),
+        models: (set.clouds.iter())
+            .map(|c| {
+                let truth: Vec<u8> = (c.labels.iter())
+                    .map(|&l| u8::from(l == Class::Sharp))
+                    .collect();
+                let predicted = ca.predict(&c.features);
+                let confusion =
+                    BinaryConfusion::from_labels(&truth, &predicted, 1).unwrap_or_default();
+                (c.name.clone(), confusion)
+            })
+            .collect(),
     }
 }
 

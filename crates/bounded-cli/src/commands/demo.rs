@@ -1,13 +1,13 @@
 //! `bounded demo`: no files needed. A generated scene with creases, smooth parts and
 //! boundaries is labelled by the embedded model and scored against its exact labels.
 
-use super::{rate, render};
+use super::rate;
 use crate::cli::DemoArgs;
 use crate::pipeline;
-use crate::render::View;
 use anyhow::{Context, Result};
 use bounded_data::LabelledCloud;
 use bounded_data::format;
+use bounded_data::picture::{View, render_classes};
 use bounded_data::synth::{NoiseDirection, Sampling, ShapeKind, ShapeSpec, generate_shape};
 use bounded_data::table::{Column, PointTable, Property};
 use bounded_geom::{Class, PointCloud};
@@ -79,7 +79,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         azimuth: 20.0,
         elevation: 35.0,
     };
-    render::picture(&scene.cloud, &detection.classes, view, [1600, 600]).save_png(&png)?;
+    render_classes(&scene.cloud, &detection.classes, view, 1600, 600).save_png(&png)?;
 
     let matrix = ConfusionMatrix::from_labels(&truth, &detection.codes())?;
     let n = scene.cloud.len();

@@ -1,84 +1,16 @@
 //! `bounded train`: features of labelled clouds, computed once, then the classifier.
 
-use super::sources::TrainingSource;
-use crate::cli::{FeatureGroupArg, TrainArgs};
-use crate::{atomic, progress};
-use anyhow::{Result, bail};
-use bounded_data::LabelledCloud;
+use super::training_clouds;
+use crate::atomic;
+use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
+use crate::progress::{self, FitBars};
+use anyhow::{Context, Result, bail};
+use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
-use bounded_nn::{ModelFile, N_CLASSES, Schedule, Step, TrainingCloud, Widths, fit_stages};
-use indicatif::ProgressBar;
+use bounded_nn::{ModelFile, N_CLASSES, Schedule, Widths, fit_stages};
 use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
-
-/// A progress display for the library's fit steps: a bar for features, one for training.
-pub struct FitBars {
-    bar: Option<(bool, ProgressBar)>,
-}
-
-impl FitBars {
-    /// No bar yet.
-    pub fn new() -> Self {
-        Self { bar: None }
-    }
-
-    /// Shows `step`, starting a new bar when the step changes.
-    pub fn show(&mut self, step: Step<'_>) {
-        let training = matches!(step, Step::Training(_));
-        if self.bar.as_ref().is_some_and(|(t, _)| *t != training) {
-            self.finish();
-        }
-        match step {
-            Step::Features {
-                done,
-                total,
-                context,
-            } => {
-                let (_, bar) = self.bar.get_or_insert_with(|| {
-                    let name = if context { "context" } else { "features" };
-                    (false, progress::bar(name, total as u64, "points"))
-                });
-                bar.set_position(done as u64);
-            }
-            Step::Training(p) => {
-                let (_, bar) = self.bar.get_or_insert_with(|| {
-                    (
-                        true,
-                        progress::bar("train", (p.iterations * p.runs) as u64, "its"),
-                    )
-                });
-                bar.inc(1);
-                if let Some(best) = p.best_val_loss {
-                    bar.set_message(format!(
-                        "run {}/{} loss {:.4} best val {best:.4}",
-                        p.run + 1,
-                        p.runs,
-                        p.loss
-                    ));
-                }
-            }
-        }
-    }
-
-    /// Clears the current bar.
-    pub fn finish(&mut self) {
-        if let Some((_, bar)) = self.bar.take() {
-            bar.finish_and_clear();
-        }
-    }
-}
-
-/// The clouds as the library's training clouds.
-pub fn training_clouds(clouds: &[(String, LabelledCloud)]) -> Vec<TrainingCloud<'_>> {
-    (clouds.iter())
-        .map(|(name, c)| TrainingCloud {
-            name,
-            cloud: &c.cloud,
-            labels: &c.labels,
-        })
-        .collect()
-}
 
 /// Writes a model file atomically.
 pub fn save(file: &ModelFile, path: &Path) -> Result<()> {
@@ -118,7 +50,20 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     // A bad width fails now, not after the features.
     widths.model(&config, args.context).validate()?;
     // A bad generated set or noise option fails now too.
-    let sources = TrainingSource::parse_all(&args.data, &args.noise)?;
+    let noise = &args.noise;
+    let sources = (args.data.iter())
+        .map(|spec| match TrainingSource::parse(spec)? {
+            TrainingSource::Generated(config) => Ok(TrainingSource::Generated(
+                (config.with_noise(noise.noise.as_deref(), noise.noise_along.into()))
+                    .context("--noise")?,
+            )),
+            other => Ok(other),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let generated = (sources.iter()).any(|s| matches!(s, TrainingSource::Generated(_)));
+    if !generated && (noise.noise.is_some() || noise.noise_along != NoiseAlong::Any) {
+        bail!("--noise and --noise-along apply to generated sets, and --data names none");
+    }
     let mut clouds = Vec::new();
     for (source, spec) in sources.iter().zip(&args.data) {
         let loading = progress::spinner("load");
