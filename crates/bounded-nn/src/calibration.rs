@@ -7,7 +7,7 @@ use std::fmt::Write;
 
 use bounded_geom::Class;
 
-use crate::{BinaryConfusion, N_CLASSES, class_at};
+use crate::{BinaryConfusion, Detector, N_CLASSES, NnError, Scores, TrainingCloud, class_at};
 
 /// Sensitivities at which [`sweep`] scores a detection by default: the range a user would
 /// choose from, in steps of 0.1.
@@ -137,6 +137,59 @@ impl Reliability {
             );
         }
         out
+    }
+}
+
+/// A detector's probabilities over labelled clouds: reliability diagrams of `p_sharp` and
+/// `p_boundary`, and the sharp-edge confusions at every one of [`SENSITIVITIES`], per cloud.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibration {
+    /// `p_sharp` against the sharp labels, all clouds.
+    pub sharp: Reliability,
+    /// `p_boundary` against the boundary labels, all clouds.
+    pub boundary: Reliability,
+    /// Per cloud, the confusion at each of [`SENSITIVITIES`].
+    pub sweeps: Vec<Vec<BinaryConfusion>>,
+}
+
+impl Calibration {
+    /// Runs `detector` over `clouds` once each.
+    pub fn measure(detector: &Detector, clouds: &[TrainingCloud<'_>]) -> Result<Self, NnError> {
+        let mut calibration = Self {
+            sharp: Reliability::new(10),
+            boundary: Reliability::new(10),
+            sweeps: Vec::with_capacity(clouds.len()),
+        };
+        for c in clouds {
+            let detection = detector.detect(c.cloud).map_err(|e| NnError::Cloud {
+                name: c.name.to_string(),
+                source: Box::new(e),
+            })?;
+            let truth = Class::codes(c.labels);
+            for (p, &t) in detection.probabilities.iter().zip(&truth) {
+                calibration.sharp.add(p[1], t == Class::Sharp as u8);
+                calibration.boundary.add(p[2], t == Class::Boundary as u8);
+            }
+            (calibration.sweeps).push(sweep(&detection.probabilities, &truth, &SENSITIVITIES));
+        }
+        Ok(calibration)
+    }
+
+    /// Median sharp-edge MCC over the clouds at each of [`SENSITIVITIES`].
+    pub fn median_mcc(&self) -> Vec<f64> {
+        (0..SENSITIVITIES.len())
+            .map(|i| {
+                let at: Vec<_> = self.sweeps.iter().map(|s| s[i]).collect();
+                Scores::median(&at).map_or(0.0, |s| s.mcc)
+            })
+            .collect()
+    }
+
+    /// The sensitivity of the highest median MCC (the first of equals).
+    pub fn best_sensitivity(&self) -> f32 {
+        let mcc = self.median_mcc();
+        let best = (0..mcc.len()).fold(0, |b, i| if mcc[i] > mcc[b] { i } else { b });
+        SENSITIVITIES[best]
     }
 }
 
