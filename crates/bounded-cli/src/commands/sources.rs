@@ -80,10 +80,13 @@ pub fn set_kind(name: &str) -> Result<SetKind> {
         SetKind::Random,
         SetKind::Boundary,
         SetKind::Mixed,
+        SetKind::Freeform,
     ]
     .into_iter()
     .find(|k| k.name() == name)
-    .with_context(|| format!("unknown set kind {name:?} (cad, random, boundary or mixed)"))
+    .with_context(|| {
+        format!("unknown set kind {name:?} (cad, random, boundary, mixed or freeform)")
+    })
 }
 
 /// The set described by `generated:KIND:SEED[:SHAPES]` (default 60 shapes).
