@@ -31,35 +31,35 @@ def run_cli(binary, *args):
     return done
 
 
-def open_box(step=0.125, size=(4.0, 3.0, 2.0)):
-    """Points on a grid over an open box (a floor and four walls, no lid), float64.
+def open_box(n=3000, size=(4.0, 3.0, 2.0), seed=0):
+    """n points drawn uniformly on an open box (a floor and four walls, no lid), float64.
 
     Sharp edges where the faces meet, a boundary around the opening. Every coordinate is a
-    multiple of step / 2 (dyadic), so float32 holds it exactly, and so does every offset
-    from the bounding-box centre: float32 and float64 input describe the same cloud.
+    multiple of 1/1024 below 8, so float32 holds it exactly, and so does every offset from
+    the bounding-box centre: float32 and float64 input describe the same cloud.
     """
     sx, sy, sz = size
-
-    def face(u_len, v_len, place):
-        u = (np.arange(round(u_len / step)) + 0.5) * step
-        v = (np.arange(round(v_len / step)) + 0.5) * step
-        uu, vv = (a.ravel() for a in np.meshgrid(u, v, indexing="ij"))
-        return place(uu, vv)
-
-    zero = np.zeros
-    faces = [
-        face(sx, sy, lambda u, v: np.column_stack([u, v, zero(len(u))])),
-        face(sx, sz, lambda u, v: np.column_stack([u, zero(len(u)), v])),
-        face(sx, sz, lambda u, v: np.column_stack([u, np.full(len(u), sy), v])),
-        face(sy, sz, lambda u, v: np.column_stack([zero(len(u)), u, v])),
-        face(sy, sz, lambda u, v: np.column_stack([np.full(len(u), sx), u, v])),
+    rng = np.random.default_rng(seed)
+    faces = [  # (width, height, the point at (u, v) in [0, 1)^2)
+        (sx, sy, lambda u, v: (u * sx, v * sy, 0 * u)),
+        (sx, sz, lambda u, v: (u * sx, 0 * u, v * sz)),
+        (sx, sz, lambda u, v: (u * sx, sy + 0 * u, v * sz)),
+        (sy, sz, lambda u, v: (0 * u, u * sy, v * sz)),
+        (sy, sz, lambda u, v: (sx + 0 * u, u * sy, v * sz)),
     ]
-    return np.concatenate(faces)
+    areas = np.array([w * h for w, h, _ in faces])
+    face = rng.choice(len(faces), n, p=areas / areas.sum())
+    u, v = rng.random(n), rng.random(n)
+    xyz = np.zeros((n, 3))
+    for k, (_, _, place) in enumerate(faces):
+        on = face == k
+        xyz[on] = np.column_stack(place(u[on], v[on]))
+    return np.round(xyz * 1024) / 1024
 
 
 @pytest.fixture(scope="session")
 def box():
-    """The open box of `open_box`, 2560 points, float64."""
+    """The open box of `open_box`, 3000 points, float64."""
     return open_box()
 
 

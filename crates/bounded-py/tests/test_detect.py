@@ -33,9 +33,9 @@ def test_detect_equals_the_cli_on_a_generated_float_cloud(
     assert xyz.dtype == np.float32
     result = bounded.detect(xyz, **kwargs)
     assert_same(result, classes, probabilities)
-    # Not a trivial answer: the cloud has edges and the probabilities vary.
+    # Not a trivial answer: the cloud has creases, and the probabilities vary.
     assert (result.classes == bounded.SHARP).sum() > 10
-    assert result.probabilities.std(axis=0).min() > 0.01
+    assert result.probabilities[:, bounded.SHARP].std() > 0.1
 
 
 def test_detect_equals_the_cli_on_utm_doubles(bounded_bin, box, tmp_path):
@@ -62,11 +62,13 @@ def test_result_arrays_and_class_codes(box):
         f"Detection({len(box)} points: {counts[1]} sharp edge, {counts[2]} boundary, "
         f"{counts[0]} non-edge)"
     )
-    # The open box: creases along the floor, a rim around the opening.
-    floor_edge = (box[:, 2] < 0.1) & (box[:, 1] < 0.1) & (np.abs(box[:, 0] - 2) < 1)
-    rim = (box[:, 2] > 1.9) & (np.abs(box[:, 0] - 2) < 1)
-    assert (result.classes[floor_edge] == bounded.SHARP).mean() > 0.5
-    assert (result.classes[rim] == bounded.BOUNDARY).mean() > 0.5
+    # The open box: a crease where the floor meets a wall, a rim around the opening.
+    crease = (box[:, 2] < 0.05) & (box[:, 1] < 0.05)
+    rim = box[:, 2] > 1.95
+    assert (result.classes[crease] == bounded.SHARP).mean() > 0.3
+    assert (result.classes[rim] == bounded.BOUNDARY).mean() > 0.3
+    middle = (np.abs(box[:, 0] - 2) < 1) & (np.abs(box[:, 1] - 1.5) < 0.7) & (box[:, 2] == 0)
+    assert (result.classes[middle] == bounded.NON_EDGE).all()
 
 
 def test_float32_and_float64_of_the_same_cloud_agree(box):
@@ -123,6 +125,7 @@ def test_every_second_point_strided(box):
         (np.zeros(300), ValueError, "got shape [300]"),
         (np.zeros((2, 300, 3)), ValueError, "got shape [2, 300, 3]"),
         (np.zeros((0, 3)), ValueError, "xyz: the point cloud is empty"),
+        ([[0, 0, "a"]] * 200, TypeError, "got dtype <U21"),
         ("not a cloud", ValueError, "got shape []"),
     ],
 )
@@ -143,7 +146,7 @@ def test_a_nan_coordinate_names_the_point(box):
 
 def test_too_few_points_says_how_many(box):
     with pytest.raises(ValueError) as raised:
-        bounded.detect(box[:100])
+        bounded.detect(box[:100])  # the embedded model's largest scale is 128
     assert "the cloud has 100 points, fewer than the largest scale (128 neighbours)" in str(
         raised.value
     )

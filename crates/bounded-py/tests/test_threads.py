@@ -51,10 +51,10 @@ def counted_during(work):
 
 
 def test_python_code_runs_during_a_detection(no_forced_switches):
-    xyz = open_box(step=0.0625)  # about 10,000 points: long enough to count through
+    xyz = open_box(n=12_000)  # long enough to count through
     # The control: a C call that keeps the GIL (sorting ints runs no Python code) stops the
     # counter; this is what a detection that held the GIL would look like.
-    held = counted_during(lambda: sorted(range(3_000_000), reverse=True))
+    held = counted_during(lambda: sorted(range(2_000_000), reverse=True))
     assert held <= 2, f"the counter advanced {held} times while the GIL was held"
     released = counted_during(lambda: bounded.detect(xyz))
     assert released >= 100, f"the counter advanced only {released} times during detect"
