@@ -66,6 +66,9 @@ const VALIDATION_SETS: [&str; 3] = [
     "generated:boundary:2003:10",
 ];
 
+/// The generated free-form feature-curve set: its own seed, never used for training.
+const FREEFORM_EVAL: (u64, usize) = (1003, 30);
+
 /// The generated CAD sets of the noise sweep: their own seed, never used for training.
 const NOISE_EVAL: (u64, usize) = (1002, 30);
 
@@ -202,7 +205,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         load_eval(&pcednet.join("default"), "default", &full)?,
         load_eval(&pcednet.join("abc"), "abc", &full)?,
         load_eval(&pcednet.join("abc_noise_0.04"), "abc_noise_0.04", &full)?,
-        boundary_eval(&full)?,
+        generated_eval(SetKind::Boundary, BOUNDARY_EVAL, &full)?,
+        generated_eval(SetKind::Freeform, FREEFORM_EVAL, &full)?,
     ];
 
     // 1-2: main tables with peers, and our CA.
@@ -337,6 +341,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         medians_table(&[b]),
         pooled(&boundary).binary(Class::Boundary as u8).f1(),
         confusion_table(&boundary)
+    );
+    let freeform = score(&ours_scorer, &full, &sets[4])?;
+    let rule = SetConfig::new(SetKind::Freeform, FREEFORM_EVAL.0, FREEFORM_EVAL.1).label_rule;
+    let _ = writeln!(
+        report,
+        "\n## Free-form feature curves (generated freeform set, seed {}, {} clouds, never \
+         trained on)\n\nGrooves, ridges, steps and creases along curves on free-form surfaces; \
+         sharp where a kink deviates by at least {} degrees and displaces by at least {} \
+         spacings, labelled in a band of {} spacings either side of the kink line. Sharp edge \
+         positive:\n\n{}",
+        FREEFORM_EVAL.0,
+        FREEFORM_EVAL.1,
+        rule.min_angle,
+        rule.min_depth,
+        rule.band,
+        medians_table(&[MethodResults::of(
+            "BoundED-rs (ours)",
+            &freeform,
+            Class::Sharp
+        )])
     );
     report.push_str(&calibration_section(&detector, &sets)?);
     let _ = writeln!(
@@ -521,10 +545,15 @@ fn load_eval(dir: &Path, key: &'static str, full: &FeatureConfig) -> Result<Eval
     Ok(EvalSet { key, clouds })
 }
 
-fn boundary_eval(full: &FeatureConfig) -> Result<EvalSet> {
-    let config = SetConfig::new(SetKind::Boundary, BOUNDARY_EVAL.0, BOUNDARY_EVAL.1);
+/// A generated evaluation set of `kind` at its own `(seed, clouds)`, with the kind's defaults.
+fn generated_eval(
+    kind: SetKind,
+    (seed, shapes): (u64, usize),
+    full: &FeatureConfig,
+) -> Result<EvalSet> {
+    let config = SetConfig::new(kind, seed, shapes);
     Ok(EvalSet {
-        key: "boundary",
+        key: kind.name(),
         clouds: featured(synth::generate(&config)?, full)?,
     })
 }
