@@ -15,6 +15,7 @@
 //! ```
 
 use crate::labels::{self, Convention};
+#[cfg(feature = "generator")]
 use crate::synth::SetConfig;
 use crate::{DataError, LabelledCloud, abc, format};
 use bounded_geom::Class;
@@ -237,6 +238,7 @@ pub enum TrainingSource {
     /// `abc:DIR`: ABC models, OBJ meshes beside their features YAML (see [`abc::load_dir`]).
     Abc(PathBuf),
     /// `generated:KIND:SEED[:SHAPES]`: a generated set (see [`SetConfig::from_spec`]).
+    #[cfg(feature = "generator")]
     Generated(SetConfig),
 }
 
@@ -244,7 +246,12 @@ impl TrainingSource {
     /// Parses `spec`: `generated:KIND:SEED[:SHAPES]`, `abc:DIR`, else a dataset directory.
     pub fn parse(spec: &str) -> Result<TrainingSource, DataError> {
         if spec.starts_with("generated:") {
+            #[cfg(feature = "generator")]
             return Ok(TrainingSource::Generated(SetConfig::from_spec(spec)?));
+            #[cfg(not(feature = "generator"))]
+            return Err(DataError::Generator {
+                what: format!("{spec:?}: built without the generator (feature `generator`)"),
+            });
         }
         Ok(match spec.strip_prefix("abc:") {
             Some(dir) => TrainingSource::Abc(dir.into()),
@@ -262,6 +269,7 @@ impl TrainingSource {
                 &mut |_, _| {},
             ),
             TrainingSource::Abc(dir) => abc::load_dir(dir),
+            #[cfg(feature = "generator")]
             TrainingSource::Generated(config) => crate::synth::generate(config),
         }
     }
@@ -270,6 +278,7 @@ impl TrainingSource {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(feature = "generator")]
     use crate::synth::{NoiseDirection, SetKind};
 
     #[test]
@@ -327,6 +336,7 @@ mod tests {
         assert!(e.contains("line 1: expected `<role> <path>`"), "{e}");
     }
 
+    #[cfg(feature = "generator")]
     #[test]
     fn generated_specs_parse_or_say_what_is_wrong() {
         let config = SetConfig::from_spec("generated:boundary:7").unwrap();
@@ -358,6 +368,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "generator")]
     #[test]
     fn noise_options_replace_the_levels_or_keep_them_and_are_checked() {
         let config = SetConfig::new(SetKind::Cad, 1, 2);
@@ -414,8 +425,16 @@ mod tests {
             parse("data/set"),
             TrainingSource::Dataset("data/set".into())
         );
-        let generated = TrainingSource::Generated(SetConfig::new(SetKind::Cad, 1, 2));
-        assert_eq!(parse("generated:cad:1:2"), generated);
-        assert!(TrainingSource::parse("generated:cad").is_err());
+        #[cfg(feature = "generator")]
+        {
+            let generated = TrainingSource::Generated(SetConfig::new(SetKind::Cad, 1, 2));
+            assert_eq!(parse("generated:cad:1:2"), generated);
+            assert!(TrainingSource::parse("generated:cad").is_err());
+        }
+        #[cfg(not(feature = "generator"))]
+        {
+            let e = TrainingSource::parse("generated:cad:1:2").unwrap_err();
+            assert!(e.to_string().contains("without the generator"), "{e}");
+        }
     }
 }
