@@ -6,11 +6,31 @@ use bounded_geom::PointCloud;
 use bounded_nn::{Detection, Detector};
 use std::path::Path;
 
-/// The detector of `model` (the embedded one for `None`), with `scales` replacing the model's
-/// and, with `fast`, its first stage alone.
-pub fn detector(model: Option<&Path>, scales: Option<&[usize]>, fast: bool) -> Result<Detector> {
+/// The model options of `detect` and `eval`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ModelOptions<'a> {
+    /// A model file (default: the embedded model).
+    pub model: Option<&'a Path>,
+    /// Scales replacing the model's.
+    pub scales: Option<&'a [usize]>,
+    /// The first stage alone.
+    pub fast: bool,
+    /// The decision threshold.
+    pub sensitivity: Option<f32>,
+}
+
+/// The detector of `options`.
+pub fn detector(options: ModelOptions<'_>) -> Result<Detector> {
+    let ModelOptions {
+        model,
+        scales,
+        fast,
+        sensitivity,
+    } = options;
     let mut detector = match model {
-        Some(p) => Detector::load(p).with_context(|| format!("cannot load model {}", p.display()))?,
+        Some(p) => {
+            Detector::load(p).with_context(|| format!("cannot load model {}", p.display()))?
+        }
         None => Detector::embedded().context("cannot load the embedded model")?,
     };
     if let Some(scales) = scales {
@@ -18,6 +38,9 @@ pub fn detector(model: Option<&Path>, scales: Option<&[usize]>, fast: bool) -> R
     }
     if fast {
         detector = detector.first_stage_only().context("--fast")?;
+    }
+    if let Some(s) = sensitivity {
+        detector = detector.with_sensitivity(s).context("--sensitivity")?;
     }
     Ok(detector)
 }

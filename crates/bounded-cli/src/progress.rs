@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 pub fn bar(step: &str, len: u64, unit: &str) -> ProgressBar {
     let bar = ProgressBar::new(len);
     let template = format!(
-        "{{prefix:>10}} [{{bar:32}}] {{human_pos}}/{{human_len}} {unit} {{per_sec}} eta {{eta}} {{msg}}"
+        "{{prefix:>10}} [{{bar:32}}] {{human_pos}}/{{human_len}} {unit}, {{elapsed}} eta {{eta}} {{msg}}"
     );
     if let Ok(style) = ProgressStyle::with_template(&template) {
         bar.set_style(style.progress_chars("=> "));

@@ -257,7 +257,14 @@ fn extract_indexed(
         match probabilities {
             Some(probabilities) => {
                 plain_features(points, chunk, config, &mut plain);
-                in_context(points, chunk, config, &plain, probabilities, &mut block.values);
+                in_context(
+                    points,
+                    chunk,
+                    config,
+                    &plain,
+                    probabilities,
+                    &mut block.values,
+                );
             }
             None => plain_features(points, chunk, config, &mut block.values),
         }
@@ -301,13 +308,20 @@ pub(crate) fn in_context(
         .zip(plain.par_chunks(config.features_per_point()))
         .zip(chunk.rows().par_chunks(chunk.k()))
         .for_each(|((out, features), row)| {
-            for (out, features) in (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale))
+            for (out, features) in
+                (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale))
             {
                 out[..per_scale].copy_from_slice(features);
             }
-            contexts(points, row, &config.scales, probabilities, |scale, values| {
-                let at = scale * stride + per_scale;
-                out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
-            });
+            contexts(
+                points,
+                row,
+                &config.scales,
+                probabilities,
+                |scale, values| {
+                    let at = scale * stride + per_scale;
+                    out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
+                },
+            );
         });
 }

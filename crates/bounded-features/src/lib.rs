@@ -31,8 +31,7 @@
 //! tests allow it for at most 1% of points, at a tolerance of 1e-3).
 //!
 //! ```
-//! use bounded_features::{FeatureConfig, FeatureGroups, extract};
-//! use bounded_geom::PointCloud;
+//! use bounded_features::{FeatureConfig, FeatureGroups, PointCloud, extract};
 //!
 //! // A 12 x 12 grid on the plane z = 0, with absolute coordinates.
 //! let positions: Vec<[f64; 3]> = (0..144)
@@ -56,6 +55,8 @@ mod extract;
 mod local;
 mod staged;
 
+/// The point cloud type the features take, re-exported so that this crate alone is enough.
+pub use bounded_geom::{GeomError, PointCloud};
 pub use config::{DEFAULT_SCALES, FeatureConfig, FeatureGroups};
 pub use context::{CONTEXT_NAMES, CONTEXT_PER_SCALE};
 pub use error::FeatureError;

@@ -18,6 +18,7 @@
 use std::collections::VecDeque;
 
 use bounded_geom::{KnnIndex, NeighbourChunk, PointCloud};
+use rayon::prelude::*;
 
 use crate::extract::{in_context, plain_features, values_per_point, with_index};
 use crate::{FeatureBlock, FeatureConfig, FeatureError};
@@ -120,10 +121,12 @@ fn staged(
         });
         search.positions(start..(start + step).min(index.len()), &mut p.chunk);
         stage.run(points, config, &p.chunk, &mut p.features);
-        p.needs = (p.chunk.rows().iter())
-            .map(|&j| position[j as usize] as usize / step)
+        // The chunk of the furthest neighbour (dividing the largest position once), in
+        // parallel: one lookup per neighbour, scattered over the cloud.
+        p.needs = (p.chunk.rows().par_iter())
+            .map(|&j| position[j as usize])
             .max()
-            .unwrap_or(c);
+            .map_or(c, |last| last as usize / step);
         pending.push_back(p);
         // Second stages whose neighbourhoods are all classified now.
         let mut i = 0;

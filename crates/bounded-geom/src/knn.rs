@@ -226,7 +226,11 @@ impl KnnSearch<'_> {
     /// The neighbour lists of the points at Morton positions `positions` (ascending, each
     /// below [`KnnIndex::len`]) into `chunk`, searched in parallel: runs of consecutive
     /// positions within one grid cell share one candidate set.
-    pub fn positions(&self, positions: impl IntoIterator<Item = usize>, chunk: &mut NeighbourChunk) {
+    pub fn positions(
+        &self,
+        positions: impl IntoIterator<Item = usize>,
+        chunk: &mut NeighbourChunk,
+    ) {
         let index = self.index;
         let k = self.k;
         chunk.k = k;

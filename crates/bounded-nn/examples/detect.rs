@@ -12,7 +12,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let runs: usize = args.next().map_or(Ok(3), |r| r.parse())?;
     let t = Instant::now();
     let cloud = bounded_data::format::read(path.as_ref())?.cloud;
-    println!("{path}: {} points, read in {:.2} s", cloud.len(), t.elapsed().as_secs_f64());
+    println!(
+        "{path}: {} points, read in {:.2} s",
+        cloud.len(),
+        t.elapsed().as_secs_f64()
+    );
     let both = Detector::embedded()?;
     let first = Detector::embedded()?.first_stage_only()?;
     for run in 1..=runs {

@@ -44,8 +44,8 @@ use crate::{Classifier, N_CLASSES, NnError, argmax, default_model};
 pub struct Detector {
     classifier: Classifier,
     config: FeatureConfig,
-    /// Sharp where `p_sharp` reaches this (see [`Detector::with_sensitivity`]); else argmax.
-    sharp_threshold: Option<f32>,
+    /// See [`Detector::with_sensitivity`]; without it, the argmax.
+    sensitivity: Option<f32>,
 }
 
 /// Per-point results of [`Detector::detect`].
@@ -93,7 +93,7 @@ impl Detector {
         Ok(Self {
             classifier,
             config,
-            sharp_threshold: None,
+            sensitivity: None,
         })
     }
 
@@ -149,7 +149,7 @@ impl Detector {
                 "sensitivity {sensitivity} is not strictly between 0 and 1"
             )));
         }
-        self.sharp_threshold = Some(1.0 - sensitivity);
+        self.sensitivity = Some(sensitivity);
         Ok(self)
     }
 
@@ -165,14 +165,7 @@ impl Detector {
 
     /// The class of a point with `probabilities`, by this detector's decision rule.
     pub fn decide(&self, probabilities: &[f32; N_CLASSES]) -> Class {
-        let [non_edge, sharp, boundary] = *probabilities;
-        let code = match self.sharp_threshold {
-            None => argmax(probabilities),
-            Some(t) if sharp >= t && sharp >= boundary => Class::Sharp as u8,
-            Some(_) if boundary > non_edge => Class::Boundary as u8,
-            Some(_) => Class::NonEdge as u8,
-        };
-        Class::from_code(code).unwrap_or(Class::NonEdge)
+        class_at(probabilities, self.sensitivity)
     }
 
     /// Classifies every point of `cloud`.
@@ -272,6 +265,20 @@ impl Detector {
             }),
         }
     }
+}
+
+/// The class of a point with `probabilities` at `sensitivity` (see
+/// [`Detector::with_sensitivity`]; `None`: the most probable class), so that one detection can
+/// be scored at many sensitivities.
+pub fn class_at(probabilities: &[f32; N_CLASSES], sensitivity: Option<f32>) -> Class {
+    let [non_edge, sharp, boundary] = *probabilities;
+    let code = match sensitivity {
+        None => argmax(probabilities),
+        Some(s) if sharp >= 1.0 - s && sharp >= boundary => Class::Sharp as u8,
+        Some(_) if boundary > non_edge => Class::Boundary as u8,
+        Some(_) => Class::NonEdge as u8,
+    };
+    Class::from_code(code).unwrap_or(Class::NonEdge)
 }
 
 /// The feature extraction `classifier` was trained with, checked against what this build

@@ -29,12 +29,17 @@
 //! point's neighbourhoods, so only the [`Detector`] (or a caller that computes that context,
 //! `bounded-features`' `extract_in_context`) gives a two-stage model's answer.
 //!
+//! Training runs on Burn's Flex backend, its pure-Rust CPU backend (NdArray is deprecated in
+//! burn 0.22): on the 2-core machine, at batch 16,384 with the default network, 0.034 s per
+//! iteration against 0.100 s with NdArray (see `backend.rs`). Only Flex is compiled.
+//!
 //! Training: build a [`Dataset`] over the feature rows and labels, a [`TrainConfig`] over a
 //! [`ModelConfig`], call [`train`], pack the result with [`ModelFile::from_trained`] and build a
 //! [`Classifier`] from the file.
 
 mod backend;
 pub mod baseline;
+pub mod calibration;
 pub mod data;
 pub mod detector;
 mod error;
@@ -49,8 +54,9 @@ mod standardisation;
 pub mod training;
 
 pub use backend::cpu_device;
+pub use calibration::Reliability;
 pub use data::{Dataset, Sampling};
-pub use detector::{Detection, Detector, Work};
+pub use detector::{Detection, Detector, Work, class_at};
 pub use error::NnError;
 pub use file::{FORMAT_VERSION, ModelFile, Provenance};
 pub use fit::{FeatureSet, Schedule, Seconds, Step, TrainingCloud, Widths, fit, fit_stages};

@@ -125,8 +125,19 @@ fn the_first_stage_alone_and_the_sensitivity() {
 fn too_few_points_and_bad_scales_are_clear_errors() {
     let cloud = PointCloud::from_f64(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]).unwrap();
     let e = Detector::embedded().unwrap().detect(&cloud).unwrap_err();
-    assert!(e.to_string().contains("3 points") && e.to_string().contains("128"), "{e}");
-    let e = Detector::embedded().unwrap().with_scales(&[64, 32]).unwrap_err();
+    assert!(
+        e.to_string().contains("3 points") && e.to_string().contains("128"),
+        "{e}"
+    );
+    let e = Detector::embedded()
+        .unwrap()
+        .with_scales(&[64, 32])
+        .unwrap_err();
     assert!(e.to_string().contains("trained on 4"), "{e}");
-    assert!(Detector::embedded().unwrap().with_scales(&[16, 32, 64, 128]).is_err());
+    assert!(
+        Detector::embedded()
+            .unwrap()
+            .with_scales(&[16, 32, 64, 128])
+            .is_err()
+    );
 }

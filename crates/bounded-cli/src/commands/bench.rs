@@ -16,6 +16,7 @@ use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::{Class, PointCloud};
 use bounded_nn::baseline::CaBaseline;
+use bounded_nn::calibration::{Calibration, SENSITIVITIES};
 use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths, columns};
 use bounded_nn::report::{
     self, MethodResults, ModelResult, confusion_table, medians_table, per_model_table, pooled,
@@ -56,6 +57,14 @@ pub const TRAINING_NOISE_ALONG: NoiseDirection = NoiseDirection::Normal;
 
 /// The generated boundary evaluation set: its own seed, never used for training.
 const BOUNDARY_EVAL: (u64, usize) = (1001, 30);
+
+/// Training-side validation clouds for calibration and the sensitivity: the training kinds
+/// with seeds of their own, never trained on and never evaluated on.
+const VALIDATION_SETS: [&str; 3] = [
+    "generated:cad:2001:10",
+    "generated:random:2002:10",
+    "generated:boundary:2003:10",
+];
 
 /// The generated CAD sets of the noise sweep: their own seed, never used for training.
 const NOISE_EVAL: (u64, usize) = (1002, 30);
@@ -329,6 +338,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         pooled(&boundary).binary(Class::Boundary as u8).f1(),
         confusion_table(&boundary)
     );
+    report.push_str(&calibration_section(&detector, &sets)?);
     let _ = writeln!(
         report,
         "\nBench wall time: {:.1} min.",
@@ -339,6 +349,51 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     println!("{report}");
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// Calibration on generated validation clouds (training-side: the training kinds and noise,
+/// other seeds), the sensitivity that maximises their median MCC, and MCC against the
+/// sensitivity on every evaluation set, for a user to choose a trade-off.
+fn calibration_section(detector: &Detector, sets: &[EvalSet]) -> Result<String> {
+    let mut validation = Vec::new();
+    for source in VALIDATION_SETS {
+        let mut config = SetConfig::from_spec(source)?;
+        config.noise_levels = TRAINING_NOISE.to_vec();
+        config.noise_direction = TRAINING_NOISE_ALONG;
+        validation.extend(synth::generate(&config)?);
+    }
+    let on_validation = Calibration::measure(detector, &training_clouds(&validation))?;
+    let mut out = format!(
+        "## Calibration and sensitivity
+
+Validation clouds ({}, training noise): expected \
+         calibration error of p_sharp {:.4}, of p_boundary {:.4}; the highest median sharp MCC \
+         at sensitivity {} (`--sensitivity`; without it, the most probable class).\n\n\
+         p_sharp reliability on them:\n\n{}\nMedian sharp MCC against `--sensitivity`:\n\n\
+         | set |",
+        VALIDATION_SETS.join(", "),
+        on_validation.sharp.expected_calibration_error(),
+        on_validation.boundary.expected_calibration_error(),
+        on_validation.best_sensitivity(),
+        on_validation.sharp.table()
+    );
+    for s in SENSITIVITIES {
+        let _ = write!(out, " {s} |");
+    }
+    out.push_str(&format!("\n|---|{}\n", "---|".repeat(SENSITIVITIES.len())));
+    let mut row = |name: &str, c: &Calibration| {
+        let _ = write!(out, "| {name} |");
+        for mcc in c.median_mcc() {
+            let _ = write!(out, " {mcc:.3} |");
+        }
+        out.push('\n');
+    };
+    row("validation", &on_validation);
+    for set in sets {
+        let clouds: Vec<_> = set.clouds.iter().map(Featured::labelled).collect();
+        row(set.key, &Calibration::measure(detector, &clouds)?);
+    }
+    Ok(out)
 }
 
 fn all_groups() -> FeatureGroups {

@@ -66,7 +66,7 @@ pub fn scene(seed: u64) -> Result<LabelledCloud> {
 
 pub fn run(args: &DemoArgs) -> Result<()> {
     let scene = scene(args.seed)?;
-    let detection = pipeline::detect(&pipeline::detector(None, None, false)?, &scene.cloud, true)?;
+    let detection = pipeline::detect(&pipeline::detector(Default::default())?, &scene.cloud, true)?;
 
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;

@@ -12,7 +12,12 @@ use std::time::Instant;
 
 pub fn run(args: &EvalArgs) -> Result<()> {
     let start = Instant::now();
-    let detector = pipeline::detector(args.model.as_deref(), args.scales.as_deref(), args.fast)?;
+    let detector = pipeline::detector(pipeline::ModelOptions {
+        model: args.model.as_deref(),
+        scales: args.scales.as_deref(),
+        fast: args.fast,
+        sensitivity: args.sensitivity,
+    })?;
     let smooth = if args.smooth_as_sharp {
         Class::Sharp
     } else {
