@@ -1,4 +1,5 @@
-//! Labelled datasets: which clouds train, validate and evaluate, and the validation sample.
+//! Labelled datasets: which clouds train, validate and evaluate, how their labels are read,
+//! and where training clouds come from.
 //!
 //! A dataset is a directory. Clouds in its `train/`, `validation/` and `evaluation/`
 //! subdirectories take that role; a `manifest.txt` (lines `<role> <path>`, paths relative
@@ -6,28 +7,19 @@
 //! set written into `train/` is a dataset like any other.
 //!
 //! ```
-//! use bounded_data::dataset::{Role, validation_sample};
-//! use bounded_geom::Class;
+//! use bounded_data::dataset::{Role, TrainingSource};
 //!
-//! let labels = [vec![Class::NonEdge; 5000], vec![Class::Sharp; 40], vec![Class::Boundary; 300]].concat();
-//! let sample = validation_sample(&labels, 7);
-//! assert_eq!(sample.len(), 1000 + 40 + 100);
 //! assert_eq!(Role::parse("train"), Some(Role::Train));
+//! assert_eq!(TrainingSource::parse("abc:models")?, TrainingSource::Abc("models".into()));
+//! # Ok::<(), bounded_data::DataError>(())
 //! ```
 
 use crate::labels::{self, Convention};
+#[cfg(feature = "generator")]
 use crate::synth::SetConfig;
 use crate::{DataError, LabelledCloud, abc, format};
 use bounded_geom::Class;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
-
-/// Points per class in the validation sample (non-edge, sharp, boundary), as in the paper.
-pub const VALIDATION_PER_CLASS: [usize; 3] = [1000, 1000, 100];
-
-/// File extensions of clouds a dataset directory may hold.
-const CLOUD_EXTENSIONS: [&str; 7] = ["ply", "pcd", "xyz", "txt", "csv", "las", "laz"];
 
 /// What a cloud is used for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -150,7 +142,7 @@ fn malformed(path: &Path, line: usize, what: &str) -> DataError {
     }
 }
 
-/// The cloud files directly in `dir`, by extension, sorted.
+/// The cloud files directly in `dir` (every extension [`format::Format`] reads), sorted.
 pub fn cloud_files(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
     let io = |source| DataError::Io {
         path: dir.to_path_buf(),
@@ -159,11 +151,7 @@ pub fn cloud_files(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
     let mut files = Vec::new();
     for entry in std::fs::read_dir(dir).map_err(io)? {
         let path = entry.map_err(io)?.path();
-        let known = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| CLOUD_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()));
-        if known && path.is_file() {
+        if format::Format::from_path(&path).is_ok() && path.is_file() {
             files.push(path);
         }
     }
@@ -250,6 +238,7 @@ pub enum TrainingSource {
     /// `abc:DIR`: ABC models, OBJ meshes beside their features YAML (see [`abc::load_dir`]).
     Abc(PathBuf),
     /// `generated:KIND:SEED[:SHAPES]`: a generated set (see [`SetConfig::from_spec`]).
+    #[cfg(feature = "generator")]
     Generated(SetConfig),
 }
 
@@ -257,7 +246,12 @@ impl TrainingSource {
     /// Parses `spec`: `generated:KIND:SEED[:SHAPES]`, `abc:DIR`, else a dataset directory.
     pub fn parse(spec: &str) -> Result<TrainingSource, DataError> {
         if spec.starts_with("generated:") {
+            #[cfg(feature = "generator")]
             return Ok(TrainingSource::Generated(SetConfig::from_spec(spec)?));
+            #[cfg(not(feature = "generator"))]
+            return Err(DataError::Generator {
+                what: format!("{spec:?}: built without the generator (feature `generator`)"),
+            });
         }
         Ok(match spec.strip_prefix("abc:") {
             Some(dir) => TrainingSource::Abc(dir.into()),
@@ -275,76 +269,17 @@ impl TrainingSource {
                 &mut |_, _| {},
             ),
             TrainingSource::Abc(dir) => abc::load_dir(dir),
+            #[cfg(feature = "generator")]
             TrainingSource::Generated(config) => crate::synth::generate(config),
         }
     }
 }
 
-/// The validation sample: [`VALIDATION_PER_CLASS`] random points of each class (all of a
-/// class that has fewer), as sorted indices into `labels`; the same seed gives the same sample.
-///
-/// For a dataset of several clouds, pass their labels concatenated.
-pub fn validation_sample(labels: &[Class], seed: u64) -> Vec<usize> {
-    validation_sample_with(labels, VALIDATION_PER_CLASS, seed)
-}
-
-/// [`validation_sample`] with other per-class counts (indexed by `Class as usize`).
-pub fn validation_sample_with(labels: &[Class], per_class: [usize; 3], seed: u64) -> Vec<usize> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut sample = Vec::new();
-    for class in Class::ALL {
-        let mut members: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == class).collect();
-        let take = per_class[class as usize].min(members.len());
-        // Partial Fisher-Yates: written out so the sample does not depend on how a rand
-        // version implements index sampling.
-        for k in 0..take {
-            let j = rng.random_range(k..members.len());
-            members.swap(k, j);
-        }
-        sample.extend_from_slice(&members[..take]);
-    }
-    sample.sort_unstable();
-    sample
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(feature = "generator")]
     use crate::synth::{NoiseDirection, SetKind};
-
-    fn labels() -> Vec<Class> {
-        // Interleaved classes: 5000 non-edge, 50 sharp, 300 boundary.
-        (0..5350)
-            .map(|i| match i % 107 {
-                0 => Class::Sharp,
-                1..=6 => Class::Boundary,
-                _ => Class::NonEdge,
-            })
-            .collect()
-    }
-
-    #[test]
-    fn validation_sample_takes_the_paper_counts_or_all() {
-        let l = labels();
-        let counts = |s: &[usize]| {
-            let mut c = [0; 3];
-            for &i in s {
-                c[l[i] as usize] += 1;
-            }
-            c
-        };
-        assert_eq!(l.iter().filter(|&&c| c == Class::Sharp).count(), 50);
-        assert_eq!(l.iter().filter(|&&c| c == Class::Boundary).count(), 300);
-        let s = validation_sample(&l, 1);
-        assert_eq!(counts(&s), [1000, 50, 100]);
-        assert!(s.windows(2).all(|w| w[0] < w[1]), "sorted and distinct");
-        assert_eq!(s, validation_sample(&l, 1));
-        assert_ne!(s, validation_sample(&l, 2));
-        assert_eq!(
-            counts(&validation_sample_with(&l, [3, 0, 300], 5)),
-            [3, 0, 300]
-        );
-    }
 
     #[test]
     fn directory_roles_and_manifest_round_trip() {
@@ -354,6 +289,8 @@ mod tests {
             ("train", "a.xyz"),
             ("train", "notes.md"),
             ("evaluation", "c.LAS"),
+            ("evaluation", "d.e57"),
+            ("validation", "scan.pcd.bak"),
         ] {
             std::fs::create_dir_all(dir.path().join(sub)).unwrap();
             std::fs::write(dir.path().join(sub).join(file), "").unwrap();
@@ -375,6 +312,7 @@ mod tests {
                 ("train/a.xyz".to_string(), Role::Train),
                 ("train/b.ply".to_string(), Role::Train),
                 ("evaluation/c.LAS".to_string(), Role::Evaluation),
+                ("evaluation/d.e57".to_string(), Role::Evaluation),
             ]
         );
         assert_eq!(m.with_role(Role::Validation).count(), 0);
@@ -398,6 +336,7 @@ mod tests {
         assert!(e.contains("line 1: expected `<role> <path>`"), "{e}");
     }
 
+    #[cfg(feature = "generator")]
     #[test]
     fn generated_specs_parse_or_say_what_is_wrong() {
         let config = SetConfig::from_spec("generated:boundary:7").unwrap();
@@ -429,6 +368,7 @@ mod tests {
         }
     }
 
+    #[cfg(feature = "generator")]
     #[test]
     fn noise_options_replace_the_levels_or_keep_them_and_are_checked() {
         let config = SetConfig::new(SetKind::Cad, 1, 2);
@@ -485,8 +425,16 @@ mod tests {
             parse("data/set"),
             TrainingSource::Dataset("data/set".into())
         );
-        let generated = TrainingSource::Generated(SetConfig::new(SetKind::Cad, 1, 2));
-        assert_eq!(parse("generated:cad:1:2"), generated);
-        assert!(TrainingSource::parse("generated:cad").is_err());
+        #[cfg(feature = "generator")]
+        {
+            let generated = TrainingSource::Generated(SetConfig::new(SetKind::Cad, 1, 2));
+            assert_eq!(parse("generated:cad:1:2"), generated);
+            assert!(TrainingSource::parse("generated:cad").is_err());
+        }
+        #[cfg(not(feature = "generator"))]
+        {
+            let e = TrainingSource::parse("generated:cad:1:2").unwrap_err();
+            assert!(e.to_string().contains("without the generator"), "{e}");
+        }
     }
 }

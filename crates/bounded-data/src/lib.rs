@@ -2,6 +2,9 @@
 //! for BoundED.
 //!
 //! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, E57.
+//!
+//! The generator ([`synth`]) is the default cargo feature `generator`; a user of the formats
+//! alone builds without it (and its random-number crates) with `default-features = false`.
 
 mod e57;
 mod error;
@@ -17,6 +20,7 @@ pub mod pcd;
 pub mod peers;
 pub mod picture;
 pub mod ply;
+#[cfg(feature = "generator")]
 pub mod synth;
 pub mod table;
 pub mod xyz;
