@@ -22,8 +22,10 @@ python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "$here/requirements-test.txt"
 echo "ci.sh: test requirements installed ($((SECONDS - start)) s)"
 
-cargo build --locked --profile "$profile" -p bounded-cli -p bounded-py --bin bounded --example features
-MATURIN_PEP517_ARGS="--locked --profile $profile" \
+cargo build --locked --profile "$profile" -p bounded-cli --bin bounded
+cargo build --locked --profile "$profile" -p bounded-py --example features
+# Without build isolation the maturin of the test requirements builds, found on PATH.
+PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--locked --profile $profile" \
     "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --no-build-isolation \
     "$here"
 echo "ci.sh: package built and installed ($((SECONDS - start)) s)"
