@@ -17,7 +17,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let table = format::read(cloud.as_ref())?;
     let config = FeatureConfig {
-        scales: scales.split(',').map(str::parse).collect::<Result<_, _>>()?,
+        scales: scales
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<_, _>>()?,
         ..FeatureConfig::default()
     };
     let start = Instant::now();
@@ -27,7 +30,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         table.len(),
         start.elapsed().as_secs_f64()
     );
-    let bytes: Vec<u8> = (features.as_slice().iter()).flat_map(|v| v.to_le_bytes()).collect();
+    let bytes: Vec<u8> = (features.as_slice().iter())
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
     std::fs::File::create(out)?.write_all(&bytes)?;
     Ok(())
 }

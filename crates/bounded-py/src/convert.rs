@@ -104,9 +104,9 @@ pub fn positions<'py>(py: Python<'py>, table: &PointTable) -> PyResult<Bound<'py
             let values = flat.map(|c| c as f32).collect();
             PyArray1::from_vec(py, values).reshape([n, 3])?.into_any()
         }
-        PositionType::F64 | PositionType::Scaled { .. } => {
-            PyArray1::from_vec(py, flat.collect()).reshape([n, 3])?.into_any()
-        }
+        PositionType::F64 | PositionType::Scaled { .. } => PyArray1::from_vec(py, flat.collect())
+            .reshape([n, 3])?
+            .into_any(),
     })
 }
 
@@ -148,7 +148,9 @@ pub fn column(name: &str, values: &Bound<'_, PyAny>) -> PyResult<Column> {
         .or_else(|| typed(&array).map(Column::I32))
         .or_else(|| typed(&array).map(Column::F32))
         .or_else(|| typed(&array).map(Column::F64))
-        .or_else(|| typed::<bool>(&array).map(|v| Column::U8(v.into_iter().map(u8::from).collect())));
+        .or_else(|| {
+            typed::<bool>(&array).map(|v| Column::U8(v.into_iter().map(u8::from).collect()))
+        });
     column.ok_or_else(|| {
         PyTypeError::new_err(format!(
             "field '{name}' has dtype {}; the formats store uint8, int8, uint16, int16, uint32, \

@@ -153,7 +153,11 @@ fn features<'py>(
     let features = py
         .detach(|| on_threads(threads, || extract(&cloud, &config)))?
         .map_err(errors::value)?;
-    let shape = [cloud.len(), config.scales.len(), config.features_per_scale()];
+    let shape = [
+        cloud.len(),
+        config.scales.len(),
+        config.features_per_scale(),
+    ];
     Ok(PyArray1::from_vec(py, features.into_vec())
         .reshape(shape)?
         .into_any())
@@ -175,7 +179,10 @@ fn bounded_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("NON_EDGE", Class::NonEdge as u8)?;
     m.add("SHARP", Class::Sharp as u8)?;
     m.add("BOUNDARY", Class::Boundary as u8)?;
-    m.add("CLASS_NAMES", PyTuple::new(m.py(), bounded_nn::CLASS_NAMES)?)?;
+    m.add(
+        "CLASS_NAMES",
+        PyTuple::new(m.py(), bounded_nn::CLASS_NAMES)?,
+    )?;
     m.add_class::<Model>()?;
     m.add_class::<Detection>()?;
     m.add_function(wrap_pyfunction!(detect, m)?)?;

@@ -149,8 +149,8 @@ impl Detection {
         let counts = detection.class_counts();
         let n = detection.classes.len();
         let classes = PyArray1::from_vec(py, detection.codes());
-        let probabilities = PyArray1::from_vec(py, detection.probabilities.into_flattened())
-            .reshape([n, 3])?;
+        let probabilities =
+            PyArray1::from_vec(py, detection.probabilities.into_flattened()).reshape([n, 3])?;
         Ok(Self {
             classes: classes.unbind(),
             probabilities: probabilities.unbind(),

@@ -49,7 +49,9 @@ impl Progress {
     pub fn report(&mut self, done: usize, total: usize) {
         match self {
             Progress::Off => {}
-            Progress::Callback { failure: Some(_), .. } => {}
+            Progress::Callback {
+                failure: Some(_), ..
+            } => {}
             Progress::Callback { callback, failure } => {
                 *failure = Python::attach(|py| callback.call1(py, (done, total)).err());
             }
