@@ -33,13 +33,16 @@ pub struct FitBars {
 }
 
 impl FitBars {
-    /// No bar yet.
-    pub fn new() -> Self {
-        Self { bar: None }
+    /// Runs `work`, showing the steps it reports, and clears the bar after.
+    pub fn around<T>(work: impl FnOnce(&mut dyn FnMut(Step<'_>)) -> T) -> T {
+        let mut bars = Self { bar: None };
+        let out = work(&mut |step| bars.show(step));
+        bars.finish();
+        out
     }
 
     /// Shows `step`, starting a new bar when the step changes.
-    pub fn show(&mut self, step: Step<'_>) {
+    fn show(&mut self, step: Step<'_>) {
         let training = matches!(step, Step::Training(_));
         if self.bar.as_ref().is_some_and(|(t, _)| *t != training) {
             self.finish();
@@ -74,7 +77,7 @@ impl FitBars {
     }
 
     /// Clears the current bar.
-    pub fn finish(&mut self) {
+    fn finish(&mut self) {
         if let Some((_, bar)) = self.bar.take() {
             bar.finish_and_clear();
         }

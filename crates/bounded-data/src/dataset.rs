@@ -230,6 +230,27 @@ pub(crate) fn stem(path: &Path) -> String {
         .unwrap_or_else(|| path.display().to_string())
 }
 
+/// Writes the generated set `config` into `dir` (created if missing), one binary PLY file
+/// with a `class` property per cloud, named after it, in parallel; calls `progress()` after
+/// each file. Returns the number of points written.
+#[cfg(feature = "generator")]
+pub fn write_generated(
+    config: &SetConfig,
+    dir: &Path,
+    progress: &(dyn Fn() + Sync),
+) -> Result<usize, DataError> {
+    use rayon::prelude::*;
+    config.validate()?;
+    std::fs::create_dir_all(dir).map_err(|e| DataError::io(dir, e))?;
+    let points = (0..config.shapes).into_par_iter().map(|i| {
+        let (name, cloud) = crate::synth::generate_one(config, i)?;
+        format::write_labelled(&dir.join(format!("{name}.ply")), &cloud)?;
+        progress();
+        Ok(cloud.cloud.len())
+    });
+    points.sum()
+}
+
 /// Where training clouds come from, parsed from a spec (`bounded train --data`).
 #[derive(Debug, Clone, PartialEq)]
 pub enum TrainingSource {
@@ -257,6 +278,22 @@ impl TrainingSource {
             Some(dir) => TrainingSource::Abc(dir.into()),
             None => TrainingSource::Dataset(spec.into()),
         })
+    }
+
+    /// This source with the noise `levels` (when given) along `direction` if it is a
+    /// generated set (see [`SetConfig::with_noise`]); other sources are used as they are.
+    #[cfg(feature = "generator")]
+    pub fn with_noise(
+        self,
+        levels: Option<&[f64]>,
+        direction: crate::synth::NoiseDirection,
+    ) -> Result<TrainingSource, DataError> {
+        match self {
+            TrainingSource::Generated(config) => Ok(TrainingSource::Generated(
+                config.with_noise(levels, direction)?,
+            )),
+            other => Ok(other),
+        }
     }
 
     /// The named labelled clouds of this source.
@@ -430,11 +467,47 @@ mod tests {
             let generated = TrainingSource::Generated(SetConfig::new(SetKind::Cad, 1, 2));
             assert_eq!(parse("generated:cad:1:2"), generated);
             assert!(TrainingSource::parse("generated:cad").is_err());
+            let normal = NoiseDirection::Normal;
+            let noisy = parse("generated:cad:1:2").with_noise(Some(&[0.5]), normal);
+            let mut config = SetConfig::new(SetKind::Cad, 1, 2);
+            config.noise_levels = vec![0.5];
+            config.noise_direction = normal;
+            assert_eq!(noisy.unwrap(), TrainingSource::Generated(config));
+            let dir = parse("data/set");
+            assert_eq!(dir.clone().with_noise(Some(&[0.5]), normal).unwrap(), dir);
+            let bad = parse("generated:cad:1:2").with_noise(Some(&[-1.0]), normal);
+            assert!(bad.unwrap_err().to_string().contains("noise level -1"));
         }
         #[cfg(not(feature = "generator"))]
         {
             let e = TrainingSource::parse("generated:cad:1:2").unwrap_err();
             assert!(e.to_string().contains("without the generator"), "{e}");
         }
+    }
+
+    #[cfg(feature = "generator")]
+    #[test]
+    fn a_generated_set_written_as_a_dataset() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("set");
+        let mut config = SetConfig::new(SetKind::Cad, 3, 2);
+        config.points = 1000..=1200;
+        let files = std::sync::atomic::AtomicUsize::new(0);
+        let progress = || {
+            files.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        };
+        let points = write_generated(&config, &out, &progress).unwrap();
+        let set = crate::synth::generate(&config).unwrap();
+        assert_eq!(files.load(std::sync::atomic::Ordering::Relaxed), 2);
+        assert_eq!(points, set.iter().map(|c| c.1.cloud.len()).sum::<usize>());
+        let read = load(&out, &[Role::Train], Class::NonEdge, &mut |_, _| {}).unwrap();
+        let names: Vec<&String> = read.iter().map(|c| &c.0).collect();
+        assert_eq!(names, set.iter().map(|c| &c.0).collect::<Vec<_>>());
+        assert_eq!(read[1].1.labels, set[1].1.labels);
+
+        config.noise_levels = vec![-1.0];
+        let refused = dir.path().join("refused");
+        assert!(write_generated(&config, &refused, &progress).is_err());
+        assert!(!refused.exists());
     }
 }

@@ -44,6 +44,7 @@ mod profile;
 mod relief;
 mod sample;
 mod scan;
+mod scene;
 mod segments;
 mod shapes;
 mod vec3;
@@ -53,6 +54,7 @@ pub use perturb::NoiseDirection;
 pub use relief::LabelRule;
 pub use sample::{Sampling, W_BORDER, W_SHARP};
 pub use scan::FreeformSampling;
+pub use scene::{DEMO_SHAPES, demo_scene};
 pub use shapes::ShapeKind;
 
 use crate::{DataError, LabelledCloud};

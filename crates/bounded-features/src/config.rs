@@ -44,6 +44,52 @@ impl FeatureGroups {
         c: true,
     };
 
+    /// No group: a base for selections such as `FeatureGroups { d: true, ..NONE }`.
+    pub const NONE: Self = Self {
+        sigma: false,
+        sigma_u: false,
+        sigma_l: false,
+        d: false,
+        s: false,
+        c: false,
+    };
+
+    /// Every group: BoundED's and `sigma` (15 values per scale).
+    pub const ALL: Self = Self {
+        sigma: true,
+        ..Self::BOUNDED
+    };
+
+    /// The paper's feature ablation, labelled: `sigma` alone, then `sigma_u` and `sigma_l`,
+    /// adding `d`, `s` and `c` in turn up to BoundED's features.
+    pub const ABLATION: [(&'static str, Self); 5] = {
+        let ul = Self {
+            sigma_u: true,
+            sigma_l: true,
+            ..Self::NONE
+        };
+        [
+            (
+                "sigma",
+                Self {
+                    sigma: true,
+                    ..Self::NONE
+                },
+            ),
+            ("sigma_U, sigma_L", ul),
+            ("sigma_U/L, d", Self { d: true, ..ul }),
+            (
+                "sigma_U/L, d, s",
+                Self {
+                    d: true,
+                    s: true,
+                    ..ul
+                },
+            ),
+            ("sigma_U/L, d, s, c (BoundED)", Self::BOUNDED),
+        ]
+    };
+
     /// Selection flags with the number of values of each group, in output order.
     fn flags(&self) -> [(bool, usize); 6] {
         [
@@ -202,6 +248,17 @@ mod tests {
         );
         assert_eq!(FeatureGroups::BOUNDED.names()[0], "sigma_u1");
         assert_eq!(FeatureGroups::BOUNDED.names()[11], "c_par");
+    }
+
+    #[test]
+    fn the_feature_ablation_adds_groups_up_to_bounded() {
+        let counts = FeatureGroups::ABLATION.map(|(_, g)| g.count());
+        assert_eq!(counts, [3, 6, 8, 10, 12]);
+        assert_eq!(FeatureGroups::ABLATION[4].1, FeatureGroups::BOUNDED);
+        assert_eq!(
+            (FeatureGroups::NONE.count(), FeatureGroups::ALL.count()),
+            (0, 15)
+        );
     }
 
     #[test]

@@ -31,15 +31,8 @@ impl CaBaseline {
     ) -> Result<Self, NnError> {
         let sigma = FeatureGroups {
             sigma: true,
-            sigma_u: false,
-            sigma_l: false,
-            d: false,
-            s: false,
-            c: false,
+            ..FeatureGroups::NONE
         };
-        let truth: Vec<u8> = (train.labels.iter())
-            .map(|&l| u8::from(l == Class::Sharp as u8))
-            .collect();
         let mut best: Option<(f64, Self)> = None;
         for &scale in scales {
             let target = FeatureConfig {
@@ -54,7 +47,7 @@ impl CaBaseline {
                     scale,
                     threshold: step as f32 / 300.0,
                 };
-                let mcc = BinaryConfusion::from_labels(&truth, &candidate.predict(train), 1)?.mcc();
+                let mcc = candidate.confusion(train)?.mcc();
                 if best.as_ref().is_none_or(|b| mcc > b.0) {
                     best = Some((mcc, candidate));
                 }
@@ -70,6 +63,11 @@ impl CaBaseline {
         (set.features.chunks_exact(set.per_point))
             .map(|row| u8::from(self.variation(row) > self.threshold))
             .collect()
+    }
+
+    /// The sharp-edge counts of [`predict`](Self::predict) on `set` against its labels.
+    pub fn confusion(&self, set: &FeatureSet) -> Result<BinaryConfusion, NnError> {
+        BinaryConfusion::from_labels(&set.labels, &self.predict(set), Class::Sharp as u8)
     }
 
     /// The surface variation of a row at the chosen scale (0 for a zero covariance).
@@ -95,11 +93,8 @@ mod tests {
             scales: vec![16, 8],
             groups: FeatureGroups {
                 sigma: true,
-                sigma_u: false,
-                sigma_l: false,
                 d: true,
-                s: false,
-                c: false,
+                ..FeatureGroups::NONE
             },
         };
         let labels = vec![0u8, 1, 0, 2, 1, 0];
@@ -130,6 +125,16 @@ mod tests {
         // above 1/128 and below 1/8.
         assert_eq!((ca.scale, ca.threshold), (8, 3.0 / 300.0));
         assert_eq!(ca.predict(&train), [0, 1, 0, 0, 1, 0]);
+        let confusion = BinaryConfusion {
+            tp: 2,
+            fp: 0,
+            tn: 4,
+            fn_: 0,
+        };
+        assert_eq!(ca.confusion(&train).unwrap(), confusion);
+        let mut wrong = train;
+        wrong.labels[3] = 1;
+        assert_eq!(ca.confusion(&wrong).unwrap().fn_, 1);
     }
 
     #[test]

@@ -117,6 +117,19 @@ impl ModelFile {
         }
     }
 
+    /// Whether `other` holds the same model (weights, standardisation, configuration and
+    /// provenance of every stage), whatever command line each records: a retraining
+    /// reproduces a model when this holds.
+    pub fn same_model(&self, other: &ModelFile) -> bool {
+        fn without_commands(file: &ModelFile) -> ModelFile {
+            let mut file = file.clone();
+            file.provenance.command.clear();
+            file.second_stage = file.second_stage.map(|s| Box::new(without_commands(&s)));
+            file
+        }
+        without_commands(self) == without_commands(other)
+    }
+
     /// The format version this file is written with: the oldest that holds it.
     pub fn format_version(&self) -> u32 {
         if self.second_stage.is_some() { 2 } else { 1 }
@@ -378,5 +391,22 @@ pub(crate) mod tests {
             ModelFile::from_bytes(&bytes[..bytes.len() - 5]),
             Err(NnError::Decode(_))
         ));
+    }
+
+    #[test]
+    fn the_same_model_whatever_its_command_but_not_with_other_weights() {
+        let embedded = crate::default_model().unwrap().file().clone();
+        let mut retrained = embedded.clone();
+        retrained.provenance.command = "bounded bench".into();
+        let second = retrained.second_stage.as_mut().unwrap();
+        second.provenance.command = "bounded bench".into();
+        assert!(retrained.same_model(&embedded));
+
+        let mut other = retrained.clone();
+        other.second_stage.as_mut().unwrap().layers[0].weight[0] += 1e-3;
+        assert!(!other.same_model(&embedded));
+        let mut other = retrained;
+        other.provenance.data_hash ^= 1;
+        assert!(!other.same_model(&embedded));
     }
 }

@@ -269,11 +269,8 @@ mod tests {
         // Per scale: sigma_1..3, d_perp, d_par.
         let groups = FeatureGroups {
             sigma: true,
-            sigma_u: false,
-            sigma_l: false,
             d: true,
-            s: false,
-            c: false,
+            ..FeatureGroups::NONE
         };
         let full = FeatureConfig {
             scales: vec![16, 8],

@@ -16,9 +16,13 @@
 
 use std::fmt::Write;
 
-use bounded_geom::Class;
+use bounded_features::FeatureConfig;
+use bounded_geom::{Class, PointCloud};
 
-use crate::{BinaryConfusion, ConfusionMatrix, Detector, NnError, Scores, TrainingCloud};
+use crate::fit::{FeatureSet, Step, feature_set};
+use crate::{
+    BinaryConfusion, Classifier, ConfusionMatrix, Detector, NnError, Scores, TrainingCloud,
+};
 
 /// One evaluated cloud.
 #[derive(Debug, Clone, PartialEq)]
@@ -119,6 +123,68 @@ pub fn evaluate(
         progress(results.len(), clouds.len());
     }
     Ok(results)
+}
+
+/// A labelled cloud with its features computed once, at a configuration that holds those of
+/// many models (the ablations': the nested neighbourhoods make a smaller configuration with
+/// the same largest scale a subset of columns), so each is scored without a feature pass.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FeaturedCloud {
+    /// Its name.
+    pub name: String,
+    /// The points, for a detector (which computes its own features).
+    pub cloud: PointCloud,
+    /// One class per point.
+    pub labels: Vec<Class>,
+    /// The features and class codes of every point.
+    pub features: FeatureSet,
+}
+
+impl FeaturedCloud {
+    /// `cloud` with its features at `config`, reporting them to `progress`.
+    pub fn new(
+        name: String,
+        cloud: PointCloud,
+        labels: Vec<Class>,
+        config: &FeatureConfig,
+        progress: &mut dyn FnMut(Step<'_>),
+    ) -> Result<Self, NnError> {
+        let labelled = TrainingCloud {
+            name: &name,
+            cloud: &cloud,
+            labels: &labels,
+        };
+        let features = feature_set(&[labelled], config, None, progress)?;
+        Ok(Self {
+            name,
+            cloud,
+            labels,
+            features,
+        })
+    }
+
+    /// The cloud as a labelled cloud, for [`evaluate`].
+    pub fn labelled(&self) -> TrainingCloud<'_> {
+        TrainingCloud {
+            name: &self.name,
+            cloud: &self.cloud,
+            labels: &self.labels,
+        }
+    }
+
+    /// The result of the one-stage `classifier` over the `columns` of the features (see
+    /// [`crate::fit::columns`]).
+    pub fn classify(
+        &self,
+        classifier: &Classifier,
+        columns: &[usize],
+    ) -> Result<ModelResult, NnError> {
+        let predicted = classifier.classify(&self.features.select(columns).features)?;
+        Ok(ModelResult {
+            name: self.name.clone(),
+            matrix: ConfusionMatrix::from_labels(&self.features.labels, &predicted)?,
+        })
+    }
 }
 
 /// Markdown table of per-model scores of one method, with the median row.
@@ -303,5 +369,56 @@ mod tests {
             [("X", vec![("a", 1), ("b", 4)]), ("Y", vec![("a", 2)])]
         );
         assert_eq!(methods[0].positive, "sharp+smooth");
+    }
+
+    #[test]
+    fn a_featured_cloud_scores_a_smaller_configuration_on_its_columns() {
+        use bounded_features::{FeatureGroups, extract};
+        // A folded sheet: a crease along x = 0.
+        let positions: Vec<[f64; 3]> = (0..30 * 30)
+            .map(|i| {
+                let (u, v) = ((i % 30) as f64 - 15.0, (i / 30) as f64);
+                if u < 0.0 { [u, v, 0.0] } else { [0.0, v, u] }
+            })
+            .collect();
+        let cloud = PointCloud::from_f64(&positions).unwrap();
+        let labels: Vec<Class> = (0..positions.len())
+            .map(|i| [Class::NonEdge, Class::Sharp][usize::from(i % 30 == 15)])
+            .collect();
+        let full = FeatureConfig {
+            scales: vec![32, 16, 8],
+            groups: FeatureGroups::ALL,
+        };
+        let featured = FeaturedCloud::new(
+            "fold".into(),
+            cloud.clone(),
+            labels.clone(),
+            &full,
+            &mut |_| {},
+        )
+        .unwrap();
+        let target = FeatureConfig {
+            scales: vec![32, 8],
+            groups: FeatureGroups::BOUNDED,
+        };
+        let columns = crate::fit::columns(&full, &target).unwrap();
+        let classifier = Classifier::from_file(crate::file::tests::random_file(2, 12, 3)).unwrap();
+        let result = featured.classify(&classifier, &columns).unwrap();
+
+        let direct = extract(&cloud, &target).unwrap();
+        assert_eq!(
+            featured.features.select(&columns).features,
+            direct.as_slice()
+        );
+        let predicted = classifier.classify(direct.as_slice()).unwrap();
+        let matrix = ConfusionMatrix::from_labels(&Class::codes(&labels), &predicted).unwrap();
+        assert_eq!(
+            result,
+            ModelResult {
+                name: "fold".into(),
+                matrix
+            }
+        );
+        assert_eq!(featured.labelled().labels, labels);
     }
 }

@@ -5,67 +5,15 @@ use super::rate;
 use crate::cli::DemoArgs;
 use crate::pipeline;
 use anyhow::{Context, Result};
-use bounded_data::LabelledCloud;
 use bounded_data::format;
 use bounded_data::picture::{View, render_classes};
-use bounded_data::synth::{NoiseDirection, Sampling, ShapeKind, ShapeSpec, generate_shape};
+use bounded_data::synth::{DEMO_SHAPES, demo_scene};
 use bounded_data::table::{Column, PointTable, Property};
-use bounded_geom::{Class, PointCloud};
+use bounded_geom::Class;
 use bounded_nn::ConfusionMatrix;
 
-/// The scene's shapes: creases and corners, a smooth torus, an open bowl (border and
-/// smooth), a stair (concave and convex creases) and an open box (creases and borders).
-const SCENE: [ShapeKind; 5] = [
-    ShapeKind::FractalCube,
-    ShapeKind::Torus,
-    ShapeKind::Bowl,
-    ShapeKind::Stairs,
-    ShapeKind::OpenBox,
-];
-
-/// Generates the demo scene: the shapes side by side, each scaled to a unit box.
-pub fn scene(seed: u64) -> Result<LabelledCloud> {
-    let mut points = Vec::new();
-    let mut labels = Vec::new();
-    for (i, &kind) in SCENE.iter().enumerate() {
-        let spec = ShapeSpec {
-            kind,
-            sampling: Sampling::Random,
-            points: 16_000,
-            noise: 0.1,
-            noise_direction: NoiseDirection::Isotropic,
-            outlier_fraction: 0.0,
-            seed: seed.wrapping_mul(31).wrapping_add(i as u64),
-        };
-        let shape = generate_shape(&spec)?;
-        let cloud = &shape.cloud;
-        let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-        for j in 0..cloud.len() {
-            let p = cloud.position_f64(j);
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
-            }
-        }
-        let size = (0..3).map(|a| hi[a] - lo[a]).fold(1e-12, f64::max);
-        for j in 0..cloud.len() {
-            let p = cloud.position_f64(j);
-            points.push([
-                (p[0] - lo[0]) / size + 1.4 * i as f64,
-                (p[1] - lo[1]) / size,
-                (p[2] - lo[2]) / size,
-            ]);
-        }
-        labels.extend_from_slice(&shape.labels);
-    }
-    Ok(LabelledCloud {
-        cloud: PointCloud::from_f64(&points)?,
-        labels,
-    })
-}
-
 pub fn run(args: &DemoArgs) -> Result<()> {
-    let scene = scene(args.seed)?;
+    let scene = demo_scene(args.seed)?;
     let detection = pipeline::detect(&pipeline::detector(Default::default())?, &scene.cloud, true)?;
 
     std::fs::create_dir_all(&args.output)
@@ -85,7 +33,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let n = scene.cloud.len();
     println!(
         "demo scene: {n} points ({} shapes), detection {:.2} s ({})",
-        SCENE.len(),
+        DEMO_SHAPES.len(),
         detection.elapsed.as_secs_f64(),
         rate(n, detection.elapsed.as_secs_f64())
     );

@@ -3,9 +3,8 @@
 use crate::cli::GenerateArgs;
 use crate::progress;
 use anyhow::{Context, Result};
-use bounded_data::format;
-use bounded_data::synth::{SetConfig, SetKind, generate_one};
-use rayon::prelude::*;
+use bounded_data::dataset::write_generated;
+use bounded_data::synth::{SetConfig, SetKind};
 use std::num::NonZeroUsize;
 use std::time::Instant;
 
@@ -15,23 +14,13 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
     let config = SetConfig::new(kind, args.seed, args.shapes.map_or(60, NonZeroUsize::get))
         .with_noise(args.noise.noise.as_deref(), args.noise.noise_along.into())
         .context("--noise")?;
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("cannot create {}", args.output.display()))?;
     let bar = progress::bar("generate", config.shapes as u64, "clouds");
-    let points: Vec<usize> = (0..config.shapes)
-        .into_par_iter()
-        .map(|i| {
-            let (name, cloud) = generate_one(&config, i)?;
-            format::write_labelled(&args.output.join(format!("{name}.ply")), &cloud)?;
-            bar.inc(1);
-            Ok(cloud.cloud.len())
-        })
-        .collect::<Result<_>>()?;
+    let points = write_generated(&config, &args.output, &|| bar.inc(1));
     bar.finish_and_clear();
+    let points = points?;
     eprintln!(
-        "{} clouds, {} points, in {} ({:.1} s)",
-        points.len(),
-        points.iter().sum::<usize>(),
+        "{} clouds, {points} points, in {} ({:.1} s)",
+        config.shapes,
         args.output.display(),
         start.elapsed().as_secs_f64()
     );

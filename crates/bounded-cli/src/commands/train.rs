@@ -7,7 +7,8 @@ use crate::progress::{self, FitBars};
 use anyhow::{Context, Result, bail};
 use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
-use bounded_nn::{ModelFile, N_CLASSES, Schedule, Widths, fit_stages};
+use bounded_geom::Class;
+use bounded_nn::{ModelFile, Schedule, Widths, fit_stages};
 use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -51,14 +52,11 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     widths.model(&config, args.context).validate()?;
     // A bad generated set or noise option fails now too.
     let noise = &args.noise;
+    let (levels, along) = (noise.noise.as_deref(), noise.noise_along.into());
+    let with_noise =
+        |spec: &String| (TrainingSource::parse(spec)?.with_noise(levels, along)).context("--noise");
     let sources = (args.data.iter())
-        .map(|spec| match TrainingSource::parse(spec)? {
-            TrainingSource::Generated(config) => Ok(TrainingSource::Generated(
-                (config.with_noise(noise.noise.as_deref(), noise.noise_along.into()))
-                    .context("--noise")?,
-            )),
-            other => Ok(other),
-        })
+        .map(with_noise)
         .collect::<Result<Vec<_>>>()?;
     let generated = (sources.iter()).any(|s| matches!(s, TrainingSource::Generated(_)));
     if !generated && (noise.noise.is_some() || noise.noise_along != NoiseAlong::Any) {
@@ -72,38 +70,34 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         loading.finish_and_clear();
         clouds.extend(loaded?);
     }
-    let mut counts = [0usize; N_CLASSES];
-    for (_, labelled) in &clouds {
-        for &l in &labelled.labels {
-            counts[l as usize] += 1;
-        }
-    }
+    let labels: Vec<Class> = clouds.iter().flat_map(|c| c.1.labels.clone()).collect();
+    let [_, sharp, boundary] = Class::counts(&labels);
     let schedule = Schedule {
         iterations: args.iterations,
         runs: args.runs,
         seed: args.seed,
     };
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let mut bars = FitBars::new();
-    let (file, seconds) = fit_stages(
-        &training_clouds(&clouds),
-        &config,
-        &schedule,
-        &widths,
-        args.context,
-        command,
-        &mut |step| bars.show(step),
-    )?;
-    bars.finish();
+    let (file, seconds) = FitBars::around(|progress| {
+        let clouds = training_clouds(&clouds);
+        fit_stages(
+            &clouds,
+            &config,
+            &schedule,
+            &widths,
+            args.context,
+            command,
+            progress,
+        )
+    })?;
     save(&file, &args.output)?;
-    let points: usize = counts.iter().sum();
     eprintln!(
         "{} clouds, {} points ({} sharp, {} boundary): features {:.1} s, \
          total {:.1} s, best validation loss {:.4}; wrote {}",
         clouds.len(),
-        points,
-        counts[1],
-        counts[2],
+        labels.len(),
+        sharp,
+        boundary,
         seconds.features,
         start.elapsed().as_secs_f64(),
         file.provenance.val_loss,
