@@ -431,6 +431,59 @@ impl Pose {
     }
 }
 
+impl SetKind {
+    /// Every kind.
+    pub const ALL: [SetKind; 5] = [
+        SetKind::Cad,
+        SetKind::Random,
+        SetKind::Boundary,
+        SetKind::Mixed,
+        SetKind::Freeform,
+    ];
+
+    /// The kind called `name` (see [`SetKind::name`]).
+    pub fn from_name(name: &str) -> Result<SetKind, DataError> {
+        let known = || SetKind::ALL.map(SetKind::name).join(", ");
+        (SetKind::ALL.into_iter().find(|k| k.name() == name)).ok_or_else(|| DataError::Generator {
+            what: format!("unknown set kind {name:?} ({})", known()),
+        })
+    }
+}
+
+impl SetConfig {
+    /// The set of `generated:KIND:SEED[:SHAPES]` (60 shapes by default), with the defaults of
+    /// [`SetConfig::new`].
+    pub fn from_spec(spec: &str) -> Result<SetConfig, DataError> {
+        let bad = |what: &str| DataError::Generator {
+            what: format!("{spec:?}: {what}"),
+        };
+        let fields: Vec<&str> = spec.split(':').collect();
+        let (kind, seed, shapes) = match fields[..] {
+            ["generated", kind, seed] => (kind, seed, "60"),
+            ["generated", kind, seed, shapes] => (kind, seed, shapes),
+            _ => return Err(bad("expected generated:KIND:SEED[:SHAPES]")),
+        };
+        let seed = seed.parse().map_err(|_| bad("bad seed"))?;
+        let shapes = (shapes.parse().ok().filter(|&n: &usize| n > 0))
+            .ok_or_else(|| bad("the shape count must be a whole number above 0"))?;
+        Ok(SetConfig::new(SetKind::from_name(kind)?, seed, shapes))
+    }
+
+    /// This set with noise `levels` (when given; else its own) along `direction`, checked.
+    pub fn with_noise(
+        mut self,
+        levels: Option<&[f64]>,
+        direction: NoiseDirection,
+    ) -> Result<SetConfig, DataError> {
+        if let Some(levels) = levels {
+            self.noise_levels = levels.to_vec();
+        }
+        self.noise_direction = direction;
+        self.validate()?;
+        Ok(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

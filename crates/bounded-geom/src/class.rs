@@ -37,7 +37,7 @@ impl Class {
     }
 
     /// Lower-case name, as used in reports and model files.
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Class::NonEdge => "non-edge",
             Class::Sharp => "sharp",

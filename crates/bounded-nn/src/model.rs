@@ -13,14 +13,20 @@ use burn::tensor::activation::relu;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+use bounded_geom::Class;
+
 use crate::backend::read_f32;
 use crate::{NnError, Standardisation};
 
 /// Number of output classes: non-edge, sharp edge, boundary.
-pub const N_CLASSES: usize = 3;
+pub const N_CLASSES: usize = Class::ALL.len();
 
-/// Names of the classes, in code order.
-pub const CLASS_NAMES: [&str; N_CLASSES] = ["non-edge", "sharp", "boundary"];
+/// Names of the classes, in code order (as [`Class::name`] gives them).
+pub const CLASS_NAMES: [&str; N_CLASSES] = [
+    Class::ALL[0].name(),
+    Class::ALL[1].name(),
+    Class::ALL[2].name(),
+];
 
 /// Shape and regularisation of the network.
 ///
