@@ -350,7 +350,7 @@ mod tests {
             ),
             (
                 "generated:cube:1",
-                "unknown set kind \"cube\" (cad, random, boundary, mixed)",
+                "unknown set kind \"cube\" (cad, random, boundary, mixed, freeform)",
             ),
             ("generated:cad:x", "bad seed"),
             (
