@@ -8,7 +8,7 @@
 //! strokes, ellipses, blobs, spirals, families of parallel paths and concentric circles,
 //! round closed curves (plateaus, pockets, stamped discs) and, on sheets, across the whole
 //! domain (ledges and creases). Sizes are drawn in units of the expected point spacing:
-//! widths from 0.3 to 6 spacings, wall angles from 3 to 75 degrees (steps up to 85), depths
+//! widths from 0.3 to 6 spacings, wall angles from 5 to 75 degrees (steps up to 80), depths
 //! up to 5 spacings, curves from a few to 150 spacings long, until the features' labelled
 //! area reaches a random 4..25% of the surface. See [`LabelRule`] for the labels and
 //! [`FreeformSampling`] for the sampling.
@@ -16,10 +16,12 @@
 //! [`LabelRule`]: super::LabelRule
 
 use super::grid::{Grid, bounds};
+use super::mesh::Polyline;
 use super::perturb;
 use super::profile::P2;
 use super::relief::{Curve, Feature, Graph, LabelRule, Profile, Relief, Side};
 use super::scan::{self, FreeformSampling, Plan};
+use super::segments::CurveTree;
 use super::shapes::detail;
 use super::vec3::{V3, add, cross, dot, norm, normalize, scale, sub, tangent_frame};
 use super::{NoiseDirection, Pose, check_noise, check_outlier_fraction};
@@ -427,7 +429,7 @@ const GAP: f64 = 0.5;
 
 /// Features are placed until their labelled area reaches the budget or this many
 /// candidates were tried.
-const MAX_TRIES: usize = 300;
+const MAX_TRIES: usize = 600;
 
 /// A curve of a feature before it is put on the base.
 enum Design {
@@ -551,7 +553,7 @@ fn symmetric_profile(u: f64, rng: &mut impl Rng) -> Profile {
         };
     }
     let half_width = detail(rng, 0.3 * u, 6.0 * u);
-    let rim = detail(rng, 3.0, 75.0).to_radians().tan();
+    let rim = detail(rng, 5.0, 75.0).to_radians().tan();
     let max_depth = 5.0 * u;
     if pick < 0.5 {
         Profile::V {
@@ -573,7 +575,7 @@ fn symmetric_profile(u: f64, rng: &mut impl Rng) -> Profile {
     }
 }
 
-/// A step, sharp (deviation 4..85 degrees at both edges) or smooth.
+/// A step, sharp (deviation 5..80 degrees at both edges) or smooth.
 fn step_profile(u: f64, rng: &mut impl Rng) -> Profile {
     let sign = random_sign(rng);
     if rng.random_bool(0.15) {
@@ -582,8 +584,8 @@ fn step_profile(u: f64, rng: &mut impl Rng) -> Profile {
             height: sign * detail(rng, 0.5 * u, 5.0 * u),
         };
     }
-    let slope = detail(rng, 4.0, 85.0).to_radians().tan();
-    let height = detail(rng, 0.15 * u, 6.0 * u);
+    let slope = detail(rng, 5.0, 80.0).to_radians().tan();
+    let height = detail(rng, 0.2 * u, 6.0 * u);
     Profile::Ramp {
         width: (height / slope).clamp(0.05 * u, 20.0 * u),
         height: sign * height,
@@ -594,31 +596,17 @@ fn step_profile(u: f64, rng: &mut impl Rng) -> Profile {
 struct Placer<'a> {
     base: &'a Base,
     unit: f64,
-    /// Samples of the placed curves, about a unit apart.
-    occupied: Grid,
-    /// The support radius of each sample's feature.
-    support: Vec<f64>,
-    /// The largest support a feature may have.
-    max_support: f64,
+    /// The placed features' curves (for exact distances) and supports.
+    placed: Vec<(CurveTree, f64)>,
     features: Vec<Feature>,
 }
 
 impl<'a> Placer<'a> {
     fn new(base: &'a Base, unit: f64) -> Self {
-        // Steps are at most 20 units wide plus their side margin.
-        let max_support = 23.0 * unit;
-        let [lo, hi] = base.domain();
-        let corners = (0..=16 * 16).map(|i| {
-            let (a, b) = ((i % 17) as f64 / 16.0, (i / 17) as f64 / 16.0);
-            base.frame([lo[0] + a * (hi[0] - lo[0]), lo[1] + b * (hi[1] - lo[1])])
-                .0
-        });
         Self {
             base,
             unit,
-            occupied: Grid::new(2.0 * max_support + (GAP + 1.0) * unit, bounds(corners)),
-            support: Vec::new(),
-            max_support,
+            placed: Vec::new(),
             features: Vec::new(),
         }
     }
@@ -885,39 +873,38 @@ impl<'a> Placer<'a> {
     /// Tries a group; on success places it and returns its estimated labelled area.
     fn try_place(&mut self, group: Vec<(Profile, Design)>) -> f64 {
         let u = self.unit;
-        let mut accepted: Vec<(Feature, Vec<V3>, f64)> = Vec::new();
+        let (placed, total) = (self.placed.len(), group.len());
+        let mut accepted = Vec::new();
         for (profile, design) in group {
             let Some(curve) = self.lift(&design) else {
-                return 0.0;
+                break;
             };
             let feature = Feature { profile, curve };
             let r = feature.support(u);
-            if r > self.max_support || !self.fits(&feature.curve, r) {
-                return 0.0;
-            }
-            let samples = subsample(&feature.curve, u);
-            let clear = samples.iter().all(|&p| {
-                !self
-                    .occupied
-                    .search_near(p, |i, d| d < self.support[i as usize] + r + (GAP + 1.0) * u)
-            }) && accepted.iter().all(|(_, other, r2)| {
-                samples.iter().all(|&p| {
-                    other
+            // Samples a unit apart: the curve between them lies within half a unit.
+            let clear = self.fits(&feature.curve, r)
+                && subsample(&feature.curve, u).iter().all(|&p| {
+                    self.placed
                         .iter()
-                        .all(|&q| norm(sub(p, q)) >= r + r2 + (GAP + 1.0) * u)
-                })
-            });
+                        .all(|(tree, r2)| tree.nearest(p, r + r2 + (GAP + 0.5) * u).is_none())
+                });
             if !clear {
-                return 0.0;
+                break;
             }
-            accepted.push((feature, samples, r));
+            let line = Polyline {
+                points: feature.curve.points.clone(),
+                closed: feature.curve.closed,
+            };
+            self.placed.push((CurveTree::new(&line), r));
+            accepted.push(feature);
+        }
+        // All or nothing: a group whose member failed is taken back.
+        if accepted.len() < total {
+            self.placed.truncate(placed);
+            return 0.0;
         }
         let mut labelled = 0.0;
-        for (feature, samples, r) in accepted {
-            for p in samples {
-                self.occupied.insert(p);
-                self.support.push(r);
-            }
+        for feature in accepted {
             let kinks = feature.profile.kinks().len() as f64;
             if kinks > 0.0 {
                 let width = (2.0 * kinks * u).min(2.0 * feature.profile.reach() + 2.0 * u);
@@ -1058,7 +1045,7 @@ fn word(r: f64, u: f64, rng: &mut impl Rng) -> Vec<Vec<P2>> {
 
 /// Features placed on `base` until their labelled area reaches a random 4..25% of it.
 pub(crate) fn random_relief(base: Base, unit: f64, rng: &mut impl Rng) -> Relief {
-    let budget = rng.random_range(0.04..0.25) * base.area();
+    let budget = rng.random_range(0.1..0.6) * base.area();
     let mut placer = Placer::new(&base, unit);
     let mut used = 0.0;
     for _ in 0..MAX_TRIES {

@@ -15,7 +15,7 @@ use super::freeform::Base;
 use super::grid::bounds;
 use super::mesh::Polyline;
 use super::profile::P2;
-use super::segments::SegmentIndex;
+use super::segments::{CurveTree, SegmentIndex};
 use super::vec3::{V3, add, cross, dot, norm, normalize, scale, sub, tangent_frame};
 use crate::DataError;
 use bounded_geom::Class;
@@ -313,11 +313,14 @@ pub(crate) struct KinkLine {
 pub(crate) struct Relief {
     pub(crate) base: Base,
     pub(crate) features: Vec<Feature>,
-    /// Per feature: the distance index of its curve, the radius it answers (its support),
-    /// and the box outside which the curve is out of reach.
-    reach: Vec<(SegmentIndex, f64, [V3; 2])>,
-    /// Per feature: the box of its curve's parameters (a quick outside test).
-    uv_boxes: Vec<[P2; 2]>,
+    /// Per feature: the distance tree of its curve and its support.
+    reach: Vec<(CurveTree, f64)>,
+    /// Per closed feature: its curve's parameter polygon, for the inside test.
+    polygons: Vec<Option<Polygon>>,
+    /// The features each region may be within reach of.
+    lookup: Lookup,
+    /// The one-sided features, whose far side is raised wherever it is.
+    one_sided: Vec<u32>,
     /// The length unit of numerical steps: about the point spacing.
     unit: f64,
 }
@@ -352,29 +355,28 @@ impl Relief {
         let reach = features
             .iter()
             .map(|f| {
-                let r = f.support(unit);
-                let reach = KINK_REACH * r;
-                let [lo, hi] = bounds(f.curve.points.iter().copied());
-                let box_ = [lo.map(|c| c - reach), hi.map(|c| c + reach)];
                 let line = Polyline {
                     points: f.curve.points.clone(),
                     closed: f.curve.closed,
                 };
-                (SegmentIndex::new(&[line], reach, box_), r, box_)
+                (CurveTree::new(&line), f.support(unit))
             })
             .collect();
-        let uv_boxes = features
+        let polygons = features
             .iter()
-            .map(|f| {
-                let [lo, hi] = bounds(f.curve.uv.iter().map(|&[u, v]| [u, v, 0.0]));
-                [[lo[0], lo[1]], [hi[0], hi[1]]]
-            })
+            .map(|f| f.curve.closed.then(|| Polygon::new(&f.curve.uv)))
+            .collect();
+        let lookup = Lookup::new(&features, unit);
+        let one_sided = (0..features.len() as u32)
+            .filter(|&i| features[i as usize].profile.one_sided())
             .collect();
         Self {
             base,
             features,
             reach,
-            uv_boxes,
+            polygons,
+            lookup,
+            one_sided,
             unit,
         }
     }
@@ -382,11 +384,8 @@ impl Relief {
     /// Signed distance from base point `p` (normal `n`) to feature `i`'s curve, if within
     /// `reach` (at most [`KINK_REACH`]) times its support.
     fn signed_distance(&self, i: usize, p: V3, n: V3, reach: f64) -> Option<f64> {
-        let (index, r, [lo, hi]) = &self.reach[i];
-        if (0..3).any(|a| p[a] < lo[a] || p[a] > hi[a]) {
-            return None;
-        }
-        let near = index.nearest(p, reach * r)?;
+        let (tree, r) = &self.reach[i];
+        let near = tree.nearest(p, reach * r)?;
         let left = dot(cross(n, near.direction), sub(p, near.point)) >= 0.0;
         Some(if left { near.distance } else { -near.distance })
     }
@@ -406,9 +405,9 @@ impl Relief {
                     }
                     None => uv[0],
                 };
-                let [lo, hi] = self.uv_boxes[i];
-                let boxed = u >= lo[0] && u <= hi[0] && uv[1] >= lo[1] && uv[1] <= hi[1];
-                boxed && inside_polygon(&curve.uv, [u, uv[1]])
+                self.polygons[i]
+                    .as_ref()
+                    .is_some_and(|p| p.contains([u, uv[1]]))
             }
         }
     }
@@ -418,16 +417,23 @@ impl Relief {
     fn height(&self, uv: P2, p: V3, n: V3) -> (f64, f64) {
         let mut h = 0.0;
         let mut steep = 0.0;
-        for (i, f) in self.features.iter().enumerate() {
-            match self.signed_distance(i, p, n, 1.0) {
+        let near = self.lookup.get(p);
+        for &i in near {
+            let f = &self.features[i as usize];
+            match self.signed_distance(i as usize, p, n, 1.0) {
                 Some(s) => {
                     h += f.profile.value(s);
                     steep = f.profile.steepness(s).max(steep);
                 }
-                None if f.profile.one_sided() && self.left_far(i, uv) => {
+                None if f.profile.one_sided() && self.left_far(i as usize, uv) => {
                     h += f.profile.value(f64::INFINITY);
                 }
                 None => {}
+            }
+        }
+        for &i in &self.one_sided {
+            if !near.contains(&i) && self.left_far(i as usize, uv) {
+                h += self.features[i as usize].profile.value(f64::INFINITY);
             }
         }
         (h, steep)
@@ -435,16 +441,16 @@ impl Relief {
 
     /// The displaced surface at `uv`.
     pub(crate) fn point(&self, uv: P2) -> V3 {
-        self.point_and_weight(uv).0
+        self.point_and_stretch(uv).0
     }
 
-    /// The displaced surface at `uv` and its area per unit `uv` area: the base's area
-    /// element times the profile's slope stretch `sqrt(1 + h'^2)` (its change of the base
-    /// curvature, of order depth / radius, is left out: an approximately uniform density).
-    pub(crate) fn point_and_weight(&self, uv: P2) -> (V3, f64) {
-        let (p, n, area) = self.base.frame(uv);
+    /// The displaced surface at `uv` and how much it stretches the base's area there: the
+    /// profile's slope stretch `sqrt(1 + h'^2)` (its change of the base curvature, of
+    /// order depth / radius, is left out: an approximately uniform density).
+    pub(crate) fn point_and_stretch(&self, uv: P2) -> (V3, f64) {
+        let (p, n, _) = self.base.frame(uv);
         let (h, steep) = self.height(uv, p, n);
-        (add(p, scale(n, h)), area * (1.0 + steep * steep).sqrt())
+        (add(p, scale(n, h)), (1.0 + steep * steep).sqrt())
     }
 
     /// The unit normal of the displaced surface at `uv`, by central differences over
@@ -458,10 +464,17 @@ impl Relief {
         normalize(cross(du, dv))
     }
 
-    /// The largest slope stretch of any feature: bounds [`point_and_weight`]'s ratio to
-    /// the base's area element.
+    /// A bound of [`point_and_stretch`]'s stretch at parameters whose base point is `p`:
+    /// the largest of the features that may reach it.
     ///
-    /// [`point_and_weight`]: Self::point_and_weight
+    /// [`point_and_stretch`]: Self::point_and_stretch
+    pub(crate) fn stretch_bound(&self, p: V3) -> f64 {
+        self.lookup.index(p).map_or(1.0, |i| self.lookup.stretch[i])
+    }
+
+    /// The largest slope stretch of any feature: bounds [`stretch_bound`].
+    ///
+    /// [`stretch_bound`]: Self::stretch_bound
     pub(crate) fn max_stretch(&self) -> f64 {
         self.features
             .iter()
@@ -492,7 +505,12 @@ impl Relief {
     fn offset_line(&self, i: usize, k: f64) -> Vec<KinkLine> {
         let curve = &self.features[i].curve;
         let n = curve.points.len();
+        // Every other curve vertex (and an open curve's last): at most 2 degrees of turn
+        // and well under a spacing apart, as designed.
+        let last = (!curve.closed && (n - 1) % 2 == 1).then_some(n - 1);
         let vertices: Vec<Option<(V3, f64)>> = (0..n)
+            .step_by(2)
+            .chain(last)
             .map(|j| {
                 let q = curve.points[j];
                 let (prev, next) = if curve.closed {
@@ -696,20 +714,158 @@ fn sharp_runs(line: &KinkLine, min_angle: f64) -> Vec<Polyline> {
         .collect()
 }
 
-/// Even-odd point-in-polygon test.
-fn inside_polygon(polygon: &[P2], p: P2) -> bool {
-    let n = polygon.len();
-    let mut inside = false;
-    for i in 0..n {
-        let (a, b) = (polygon[i], polygon[(i + 1) % n]);
-        if (a[1] > p[1]) != (b[1] > p[1]) {
-            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-            if p[0] < x {
-                inside = !inside;
+/// A coarse grid over the features' reach, each cell listing (in order) the features
+/// whose support may reach into it: a point consults those few, not every feature.
+struct Lookup {
+    lo: V3,
+    cell: f64,
+    dims: [usize; 3],
+    cells: Vec<Vec<u32>>,
+    /// Per cell, the largest slope stretch of its features.
+    stretch: Vec<f64>,
+}
+
+impl Lookup {
+    fn new(features: &[Feature], unit: f64) -> Self {
+        let reach: Vec<f64> = features.iter().map(|f| f.support(unit)).collect();
+        let [mut lo, mut hi] = bounds(features.iter().flat_map(|f| f.curve.points.iter().copied()));
+        let widest = reach.iter().copied().fold(0.0, f64::max);
+        lo = lo.map(|c| c - widest);
+        hi = hi.map(|c| c + widest);
+        // At most 48 cells along the longest side, none smaller than 4 units.
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+        let cell = (extent / 48.0).max(4.0 * unit).max(f64::MIN_POSITIVE);
+        let dims = [0, 1, 2].map(|a| (((hi[a] - lo[a]) / cell).floor() as usize + 1).max(1));
+        let mut cells = vec![
+            Vec::new();
+            if features.is_empty() {
+                0
+            } else {
+                dims.iter().product()
+            }
+        ];
+        let coord = |x: f64, a: usize| {
+            ((x - lo[a]) / cell)
+                .floor()
+                .clamp(0.0, (dims[a] - 1) as f64) as usize
+        };
+        for (i, f) in features.iter().enumerate() {
+            // Samples at most half a cell apart: a point within reach of the curve is
+            // within reach plus a quarter cell of one of them.
+            let r = reach[i] + 0.25 * cell;
+            let mut since = f64::INFINITY;
+            let points = &f.curve.points;
+            for (j, &p) in points.iter().enumerate() {
+                if j > 0 {
+                    since += norm(sub(p, points[j - 1]));
+                }
+                if since < 0.5 * cell && j + 1 < points.len() {
+                    continue;
+                }
+                since = 0.0;
+                let [x0, y0, z0] = [0, 1, 2].map(|a| coord(p[a] - r, a));
+                let [x1, y1, z1] = [0, 1, 2].map(|a| coord(p[a] + r, a));
+                for z in z0..=z1 {
+                    for y in y0..=y1 {
+                        for x in x0..=x1 {
+                            let list = &mut cells[(z * dims[1] + y) * dims[0] + x];
+                            if list.last() != Some(&(i as u32)) {
+                                list.push(i as u32);
+                            }
+                        }
+                    }
+                }
             }
         }
+        let stretch = cells
+            .iter()
+            .map(|list| {
+                list.iter()
+                    .map(|&i| features[i as usize].profile.max_steepness())
+                    .fold(0.0, f64::max)
+                    .hypot(1.0)
+            })
+            .collect();
+        Self {
+            lo,
+            cell,
+            dims,
+            cells,
+            stretch,
+        }
     }
-    inside
+
+    /// The index of the cell holding `p`, if any.
+    fn index(&self, p: V3) -> Option<usize> {
+        let mut index = 0;
+        for a in (0..3).rev() {
+            let c = ((p[a] - self.lo[a]) / self.cell).floor();
+            if !(c >= 0.0 && c < self.dims[a] as f64) {
+                return None;
+            }
+            index = index * self.dims[a] + c as usize;
+        }
+        (index < self.cells.len()).then_some(index)
+    }
+
+    /// The features that may reach `p`.
+    fn get(&self, p: V3) -> &[u32] {
+        self.index(p).map_or(&[], |i| self.cells[i].as_slice())
+    }
+}
+
+/// A closed parameter polygon with its edges bucketed into bands of `v`: an even-odd
+/// inside test that crosses the few edges of the point's band only.
+struct Polygon {
+    points: Vec<P2>,
+    lo: P2,
+    hi: P2,
+    band: f64,
+    bands: Vec<Vec<u32>>,
+}
+
+impl Polygon {
+    fn new(points: &[P2]) -> Self {
+        let [lo, hi] = bounds(points.iter().map(|&[u, v]| [u, v, 0.0]));
+        let (lo, hi) = ([lo[0], lo[1]], [hi[0], hi[1]]);
+        let count = (points.len() / 8).max(1);
+        let band = ((hi[1] - lo[1]) / count as f64).max(f64::MIN_POSITIVE);
+        let index = |v: f64| (((v - lo[1]) / band) as usize).min(count - 1);
+        let mut bands = vec![Vec::new(); count];
+        let n = points.len();
+        for i in 0..n {
+            let (a, b) = (points[i][1], points[(i + 1) % n][1]);
+            for k in index(a.min(b))..=index(a.max(b)) {
+                bands[k].push(i as u32);
+            }
+        }
+        Self {
+            points: points.to_vec(),
+            lo,
+            hi,
+            band,
+            bands,
+        }
+    }
+
+    fn contains(&self, p: P2) -> bool {
+        if p[0] < self.lo[0] || p[0] > self.hi[0] || p[1] < self.lo[1] || p[1] > self.hi[1] {
+            return false;
+        }
+        let k = (((p[1] - self.lo[1]) / self.band) as usize).min(self.bands.len() - 1);
+        let n = self.points.len();
+        let mut inside = false;
+        for &i in &self.bands[k] {
+            let (a, b) = (self.points[i as usize], self.points[(i as usize + 1) % n]);
+            if (a[1] > p[1]) != (b[1] > p[1]) {
+                let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                if p[0] < x {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
 }
 
 #[cfg(test)]

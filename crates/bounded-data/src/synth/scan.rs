@@ -187,7 +187,8 @@ pub(crate) fn sample(
 }
 
 /// Uniform random points by rejection: parameters uniform in the domain, kept with
-/// probability proportional to the displaced area element times the density factor.
+/// probability proportional to the displaced surface's area element times the density
+/// factor.
 fn random(
     relief: &Relief,
     density: &Density,
@@ -195,7 +196,8 @@ fn random(
     rng: &mut impl Rng,
 ) -> (Vec<V3>, Vec<P2>) {
     let [lo, hi] = relief.base.domain();
-    let bound = relief.base.max_area_element() * relief.max_stretch() * (1.0 + density.gradient);
+    let area_bound = relief.base.max_area_element() * (1.0 + density.gradient);
+    let stretch_bound = relief.max_stretch();
     let mut points = Vec::with_capacity(target);
     let mut uvs = Vec::with_capacity(target);
     while points.len() < target {
@@ -203,8 +205,20 @@ fn random(
             rng.random_range(lo[0]..hi[0]),
             rng.random_range(lo[1]..hi[1]),
         ];
-        let (p, weight) = relief.point_and_weight(uv);
-        if rng.random::<f64>() * bound > weight * density.factor(uv) {
+        // Three tests, the cheap ones first (the base, the local bound of the stretch):
+        // together they keep a point with probability proportional to area element x
+        // density x stretch, and only points near steep features pay for the last.
+        let [u1, u2, u3] = [(); 3].map(|()| rng.random::<f64>());
+        let (base, _, area) = relief.base.frame(uv);
+        if u1 * area_bound > area * density.factor(uv) {
+            continue;
+        }
+        let local = relief.stretch_bound(base);
+        if u2 * stretch_bound > local {
+            continue;
+        }
+        let (p, stretch) = relief.point_and_stretch(uv);
+        if u3 * local > stretch {
             continue;
         }
         points.push(p);
