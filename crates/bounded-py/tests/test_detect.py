@@ -22,6 +22,7 @@ def assert_same(result, classes, probabilities):
         ((), {}),
         (("--fast",), {"fast": True}),
         (("--scales", "64,32,16,8"), {"scales": [64, 32, 16, 8]}),
+        (("--sensitivity", "0.8"), {"sensitivity": 0.8}),
     ],
 )
 def test_detect_equals_the_cli_on_a_generated_float_cloud(
