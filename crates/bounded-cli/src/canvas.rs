@@ -107,7 +107,7 @@ impl Canvas {
 
     /// Writes the canvas as an 8-bit RGB PNG, atomically (temporary file, then rename).
     pub fn save_png(&self, path: &Path) -> Result<()> {
-        crate::atomic::write_with(path, |file| {
+        bounded_geom::atomic::write_with(path, |file| -> Result<()> {
             let mut encoder = png::Encoder::new(file, self.width as u32, self.height as u32);
             encoder.set_color(png::ColorType::Rgb);
             encoder.set_depth(png::BitDepth::Eight);

@@ -10,7 +10,7 @@ use super::{rate, sources};
 use crate::cli::BenchArgs;
 use crate::peers;
 use crate::plot::{self, PALETTE, Series};
-use crate::{atomic, pipeline};
+use crate::pipeline;
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
@@ -320,7 +320,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         start.elapsed().as_secs_f64() / 60.0
     );
     let path = args.output.join("report.md");
-    atomic::write_text(&path, &report)?;
+    bounded_geom::atomic::write(&path, report.as_bytes())?;
     println!("{report}");
     eprintln!("wrote {}", path.display());
     Ok(())

@@ -2,13 +2,12 @@
 
 use super::sources::TrainingSource;
 use crate::cli::{FeatureGroupArg, TrainArgs};
-use crate::{atomic, progress};
+use crate::progress;
 use anyhow::{Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_nn::{ModelFile, N_CLASSES, Schedule, Step, TrainingCloud, Widths, fit_stages};
 use indicatif::ProgressBar;
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
@@ -77,12 +76,6 @@ pub fn training_clouds(clouds: &[(String, LabelledCloud)]) -> Vec<TrainingCloud<
         .collect()
 }
 
-/// Writes a model file atomically.
-pub fn save(file: &ModelFile, path: &Path) -> Result<()> {
-    let bytes = file.to_bytes()?;
-    atomic::write_with(path, |out| Ok(out.write_all(&bytes)?))
-}
-
 /// The feature groups selected on the command line.
 pub fn groups(selected: &[FeatureGroupArg]) -> Result<FeatureGroups> {
     let has = |g| selected.contains(&g);
@@ -147,7 +140,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         &mut |step| bars.show(step),
     )?;
     bars.finish();
-    save(&file, &args.output)?;
+    file.save(&args.output)?;
     let points: usize = counts.iter().sum();
     eprintln!(
         "{} clouds, {} points ({} sharp, {} boundary): features {:.1} s, \
