@@ -1,8 +1,8 @@
 //! Format dispatch by file extension and atomic (temp file + rename) writing.
 //!
-//! Every write goes to a temporary file in the target directory that takes the target's
-//! place (an atomic rename or exchange) only once complete, so an interrupted or failed
-//! write never leaves a partial file.
+//! Every write goes through [`bounded_geom::atomic`]: a temporary file in the target
+//! directory takes the target's place (an atomic rename or exchange) only once complete, so
+//! an interrupted or failed write never leaves a partial file.
 //!
 //! Annotated outputs add these properties to every input property (input properties of the
 //! same names are replaced, not duplicated):
@@ -131,7 +131,7 @@ pub fn write(path: &Path, table: &PointTable) -> Result<(), DataError> {
 /// Writes `view` to `path`, in the format named by its extension.
 pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
     let format = Format::from_path(path)?;
-    write_atomic(path, |file| match format {
+    bounded_geom::atomic::write_with(path, |file: &mut File| match format {
         // Unbuffered: the E57 writer writes whole 1 KiB pages and seeks back to finish.
         Format::E57 => crate::e57::write_to(file, view, path),
         Format::Ply => {
@@ -268,55 +268,6 @@ fn annotation(classes: &[Class], probabilities: &[[f32; 3]]) -> Vec<Property> {
     (ANNOTATION.into_iter().zip(columns))
         .map(|(name, values)| Property::new(name, values))
         .collect()
-}
-
-/// Runs `write` on a temporary file next to `path`, then renames it to `path`; on any
-/// error the temporary file is removed and `path` is left untouched.
-pub(crate) fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&mut File) -> Result<(), DataError>,
-) -> Result<(), DataError> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".bounded-")
-        .suffix(".part")
-        .tempfile_in(dir)
-        .map_err(|e| DataError::io(path, e))?;
-    write(tmp.as_file_mut())?;
-    // Temp files are private (0600); the result should be an ordinary file.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o644))
-            .map_err(|e| DataError::io(path, e))?;
-    }
-    if !exchange(tmp.path(), path) {
-        tmp.persist(path)
-            .map_err(|e| DataError::io(path, e.error))?;
-    }
-    // After an exchange `tmp` names the previous file, which dropping it deletes.
-    Ok(())
-}
-
-/// Swaps the finished temporary file with an existing regular file at `path` (Linux
-/// `renameat2` with `RENAME_EXCHANGE`: atomic like a rename). Why not a plain rename: on
-/// ext4 a rename over an existing file starts the writeback of the new file inside the call
-/// (`auto_da_alloc`), which made replacing a large output take twice as long as writing it.
-/// Returns false, having changed nothing, when `path` is not an existing regular file or the
-/// filesystem cannot exchange; the caller then renames.
-#[cfg(target_os = "linux")]
-fn exchange(tmp: &Path, path: &Path) -> bool {
-    use rustix::fs::{CWD, RenameFlags, renameat_with};
-    std::fs::symlink_metadata(path).is_ok_and(|m| m.is_file())
-        && renameat_with(CWD, tmp, CWD, path, RenameFlags::EXCHANGE).is_ok()
-}
-
-#[cfg(not(target_os = "linux"))]
-fn exchange(_: &Path, _: &Path) -> bool {
-    false
 }
 
 #[cfg(test)]

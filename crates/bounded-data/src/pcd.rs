@@ -8,6 +8,7 @@
 //! `red`/`green`/`blue` back into `rgb`, which PCL and CloudCompare display.
 
 use crate::DataError;
+use crate::error::quoted;
 use crate::records::{read_line, read_records, read_text_rows, truncated};
 use crate::table::{Column, Endian, PointTable, Property, ScalarType, TableView};
 use std::io::{BufRead, Read, Write};
@@ -73,7 +74,7 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
         bytes += n as u64;
         let line = String::from_utf8_lossy(&buf);
         let bad = |what: &str| {
-            DataError::malformed(path, format!("header line {lines}: {what}: '{line}'"))
+            DataError::malformed(path, format!("header line {lines}: {what}: {}", quoted(&line)))
         };
         let number = |w: &str| w.parse::<usize>().map_err(|_| bad("not a count"));
         let mut words = line.split_ascii_whitespace();
@@ -118,13 +119,18 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
         let ty = pcd_type(kind, size).ok_or_else(|| {
             DataError::malformed(
                 path,
-                format!("field '{name}' has unsupported TYPE {kind} SIZE {size}"),
+                format!(
+                    "field {} has unsupported TYPE {} SIZE {}",
+                    quoted(&name),
+                    quoted(kind),
+                    quoted(size)
+                ),
             )
         })?;
         if count == 0 || count > 4096 {
             return Err(DataError::malformed(
                 path,
-                format!("field '{name}' has COUNT {count}"),
+                format!("field {} has COUNT {count}", quoted(&name)),
             ));
         }
         fields.push(Field { name, ty, count });
@@ -515,6 +521,10 @@ mod tests {
             (
                 format!("{head}DATA binary\n\0\0\0\0"),
                 "ends within point 0 of 2",
+            ),
+            (
+                format!("{head}DATA binary\n{}", "\0".repeat(20)),
+                "ends within point 1 of 2 (at byte offset 93)",
             ),
             (
                 format!("{head}DATA binary_compressed\n\x05\0\0\0\x18\0\0\0\x01"),

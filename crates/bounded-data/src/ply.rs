@@ -10,6 +10,7 @@
 //! read.
 
 use crate::DataError;
+use crate::error::quoted;
 use crate::table::{Column, Endian, PointTable, Property, ScalarType, TableView};
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
@@ -111,7 +112,7 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
         let bad = |what: &str| {
             DataError::malformed(
                 path,
-                format!("header line {}: {what}: '{line}'", header.lines),
+                format!("header line {}: {what}: {}", header.lines, quoted(&line)),
             )
         };
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
@@ -210,7 +211,10 @@ pub(crate) fn read_properties(
             Kind::List { .. } => {
                 return Err(DataError::malformed(
                     path,
-                    format!("vertex property '{name}' is a list; vertex lists are not supported"),
+                    format!(
+                        "vertex property {} is a list; vertex lists are not supported",
+                        quoted(name)
+                    ),
                 ));
             }
         }
@@ -288,8 +292,9 @@ fn skip_ascii_items(
                     Err(DataError::malformed(
                         path,
                         format!(
-                            "the file ends at line {line} inside element '{}' (item {i} of {})",
-                            element.name, element.count
+                            "the file ends at line {line} inside element {} (item {i} of {})",
+                            quoted(&element.name),
+                            element.count
                         ),
                     ))
                 } else {
@@ -318,8 +323,8 @@ fn skip_binary_items(
         .sum();
     let ends = |at: u64| {
         format!(
-            "the data ends inside element '{}' (byte offset {at})",
-            element.name
+            "the data ends inside element {} (byte offset {at})",
+            quoted(&element.name)
         )
     };
     if let Some(stride) = fixed {
@@ -545,7 +550,18 @@ mod tests {
             ),
             (
                 format!("{}\0\0\0\0", HEAD.replace("ascii", "binary_little_endian")).into_bytes(),
-                "ends within point 0 of 2 (block at byte offset 115)",
+                "ends within point 0 of 2 (at byte offset 119)",
+            ),
+            (
+                // 5 whole points of 12 bytes and 4 bytes of the sixth.
+                [
+                    HEAD.replace("ascii", "binary_little_endian")
+                        .replace("vertex 2", "vertex 10")
+                        .into_bytes(),
+                    vec![0; 64],
+                ]
+                .concat(),
+                "ends within point 5 of 10 (at byte offset 180)",
             ),
         ];
         for (bytes, expected) in cases {

@@ -1,22 +1,14 @@
 //! `bounded train`: features of labelled clouds, computed once, then the classifier.
 
 use super::training_clouds;
-use crate::atomic;
 use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
 use crate::progress::{self, FitBars};
 use anyhow::{Context, Result, bail};
 use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_nn::{ModelFile, N_CLASSES, Schedule, Widths, fit_stages};
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
-
-/// Writes a model file atomically.
-pub fn save(file: &ModelFile, path: &Path) -> Result<()> {
-    let bytes = file.to_bytes()?;
-    atomic::write_with(path, |out| Ok(out.write_all(&bytes)?))
-}
 
 /// The feature groups selected on the command line.
 pub fn groups(selected: &[FeatureGroupArg]) -> Result<FeatureGroups> {
@@ -95,7 +87,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         &mut |step| bars.show(step),
     )?;
     bars.finish();
-    save(&file, &args.output)?;
+    file.save(&args.output)?;
     let points: usize = counts.iter().sum();
     eprintln!(
         "{} clouds, {} points ({} sharp, {} boundary): features {:.1} s, \

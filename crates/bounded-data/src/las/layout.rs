@@ -130,8 +130,10 @@ pub(super) fn fields(format: &LasFormat) -> (Vec<(&'static str, Slot)>, usize) {
 /// Size of one Extra Bytes descriptor.
 const DESCRIPTOR: usize = 192;
 
-/// The Extra Bytes of each record as named fields, from the Extra Bytes VLR; bytes not
-/// described by a typed descriptor become one `u8` field per byte.
+/// The Extra Bytes of each record as named fields, from the Extra Bytes VLR: a typed value
+/// as `name`, an array of two or three (the deprecated codes 11-30) as `name_0`, `name_1`,
+/// `name_2`; bytes not described by a typed descriptor (and 64-bit integers) become one `u8`
+/// field per byte, `name_0`, `name_1`, ...
 pub(super) fn extra_fields(header: &Header, base: usize, len: usize) -> Vec<(String, Slot)> {
     let mut out = Vec::new();
     let mut at = 0;
@@ -157,7 +159,14 @@ pub(super) fn extra_fields(header: &Header, base: usize, len: usize) -> Vec<(Str
         } else {
             name
         };
-        let (ty, size) = match d[2] {
+        // Codes 11-30 (deprecated since LAS 1.4 R14, still written by laspy): arrays of two
+        // or three values of the type of code 1-10.
+        let (code, count) = match d[2] {
+            0..=10 => (d[2], 1),
+            11..=30 => ((d[2] - 1) % 10 + 1, usize::from((d[2] - 1) / 10 + 1)),
+            _ => break, // undefined codes: the rest stays raw bytes
+        };
+        let (ty, width) = match code {
             0 => (None, usize::from(d[3])),
             1 => (Some(ScalarType::U8), 1),
             2 => (Some(ScalarType::I8), 1),
@@ -165,16 +174,20 @@ pub(super) fn extra_fields(header: &Header, base: usize, len: usize) -> Vec<(Str
             4 => (Some(ScalarType::I16), 2),
             5 => (Some(ScalarType::U32), 4),
             6 => (Some(ScalarType::I32), 4),
-            7 | 8 => (None, 8),
             9 => (Some(ScalarType::F32), 4),
             10 => (Some(ScalarType::F64), 8),
-            _ => break, // deprecated array types: the rest stays raw bytes
+            _ => (None, 8), // 7, 8: 64-bit integers
         };
+        let size = width * count;
         if at + size > len {
             break;
         }
         match ty {
-            Some(ty) => out.push((name, Slot::Plain { ty, at: base + at })),
+            Some(ty) if count == 1 => out.push((name, Slot::Plain { ty, at: base + at })),
+            Some(ty) => out.extend((0..count).map(|k| {
+                let at = base + at + k * width;
+                (format!("{name}_{k}"), Slot::Plain { ty, at })
+            })),
             None => out.extend((0..size).map(|k| {
                 (
                     format!("{name}_{k}"),

@@ -15,8 +15,15 @@
 //! 0.006 degrees), `user_data`, `point_source_id`, `gps_time`, `red`/`green`/`blue`, `nir`,
 //! and the one-bit flags (`synthetic`, `key_point`, `withheld`, `overlap`,
 //! `scanner_channel`, `scan_direction`, `edge_of_flight_line`) when any point sets them.
-//! Extra Bytes are decoded by their Extra Bytes VLR into named properties (untyped or
-//! 64-bit ones as one `u8` property per byte). Waveform packet fields are not kept.
+//! Extra Bytes are decoded by their Extra Bytes VLR into named properties: arrays of two or
+//! three values (the deprecated data types 11-30, which laspy writes) as `name_0`, `name_1`,
+//! `name_2`, untyped or 64-bit ones as one `u8` property per byte (`name_0`, `name_1`, ...).
+//! A property name that repeats another, or names a coordinate, is refused. Waveform packet
+//! fields are not kept.
+//!
+//! The point count of a LAS 1.4 file is its 64-bit count, which the specification requires
+//! to be correct whatever the legacy 32-bit one says (as laspy and PDAL read it; the `las`
+//! crate prefers a non-zero legacy count). A legacy count only is read as the count.
 //!
 //! Writing produces LAS 1.4 with point format 6, 7 (with colour) or 8 (with NIR), so that
 //! classification codes above 31 fit. A `class` property (BoundED classes) goes to the

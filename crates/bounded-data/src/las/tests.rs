@@ -204,6 +204,164 @@ fn an_extended_vlr_longer_than_the_file_fails_before_allocating() {
     assert!(msg.starts_with(expected), "{msg}");
 }
 
+/// Where the chunk table of the LAZ `bytes` starts: the first 8 bytes of the point data,
+/// whose offset is the header's u32 at byte 96.
+fn chunk_table_at(bytes: &[u8]) -> usize {
+    let data = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+    i64::from_le_bytes(bytes[data..data + 8].try_into().unwrap()) as usize
+}
+
+#[test]
+fn a_chunk_count_beyond_the_file_fails_before_allocating() {
+    let bytes = write_bytes(&sample(), true);
+    let table = chunk_table_at(&bytes);
+    // Version (u32), then the chunk count (u32): one chunk for 3 points.
+    assert_eq!(bytes[table + 4..table + 8], 1u32.to_le_bytes());
+    // 2^32 - 1 chunks: the laz crate would reserve 68 GB for their table.
+    let mut bad = bytes.clone();
+    bad[table + 4..table + 8].copy_from_slice(&u32::MAX.to_le_bytes());
+    let msg = read_from(Cursor::new(bad), Path::new("chunks.laz"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.starts_with("chunks.laz: LAZ: the chunk table declares 4294967295 chunks, but the"),
+        "{msg}"
+    );
+    // The same when the offset at the start was never written and the crate looks at the end.
+    let mut bad = bytes.clone();
+    let data = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+    bad[data..data + 8].copy_from_slice(&(-1i64).to_le_bytes());
+    bad.extend_from_slice(&(table as i64).to_le_bytes());
+    bad[table + 4..table + 8].copy_from_slice(&u32::MAX.to_le_bytes());
+    let msg = read_from(Cursor::new(bad.clone()), Path::new("chunks.laz"))
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("declares 4294967295 chunks"), "{msg}");
+    // With the right count that file reads.
+    bad[table + 4..table + 8].copy_from_slice(&1u32.to_le_bytes());
+    let back = read_from(Cursor::new(bad), Path::new("chunks.laz")).unwrap();
+    assert_eq!(back.len(), 3);
+}
+
+/// An output that takes `room` bytes, then fails as a full disk does.
+struct FullDisk {
+    data: Cursor<Vec<u8>>,
+    room: u64,
+}
+
+impl std::io::Write for FullDisk {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let left = self.room.saturating_sub(self.data.position()) as usize;
+        if left == 0 && !buf.is_empty() {
+            return Err(std::io::ErrorKind::StorageFull.into());
+        }
+        self.data.write(&buf[..buf.len().min(left)])
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl std::io::Seek for FullDisk {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.data.seek(to)
+    }
+}
+
+#[test]
+fn a_full_disk_is_an_error_in_every_part_of_a_laz_file() {
+    // A small filesystem cannot be made without privileges, so the disk fills up in the
+    // writer's output instead: after the header, within the points, within the chunk table.
+    let n = 60_000;
+    let cloud = PointCloud::from_iter_f64(n, |i| [i as f64 * 0.01, (i % 977) as f64, 0.0]).unwrap();
+    let t = PointTable::new(cloud);
+    let size = write_bytes(&t, true).len() as u64;
+    for compressed in [true, false] {
+        for room in [0, 100, 400, size / 2, size - 10] {
+            let out = FullDisk {
+                data: Cursor::new(Vec::new()),
+                room,
+            };
+            let e = write_to(out, &t.view(), compressed, Path::new("full.laz")).unwrap_err();
+            assert!(
+                matches!(&e, DataError::Io { source, .. }
+                    if source.kind() == std::io::ErrorKind::StorageFull)
+                    || e.to_string().contains("storage full")
+                    || e.to_string().contains("No space"),
+                "{room}: {e}"
+            );
+            assert!(e.to_string().starts_with("full.laz: "), "{e}");
+        }
+    }
+}
+
+/// Where the data of the Extra Bytes VLR of `bytes` starts (its first descriptor).
+fn extra_bytes_descriptors(bytes: &[u8]) -> usize {
+    let user = b"LASF_Spec\0\0\0\0\0\0\0\x04\0";
+    let at = bytes.windows(18).position(|w| w == user).unwrap();
+    // Reserved (2), user id (16), record id (2), length (2), description (32).
+    at - 2 + 54
+}
+
+#[test]
+fn arrays_of_extra_bytes_are_named_columns_and_repeated_names_are_refused() {
+    let n = 4;
+    let cloud = PointCloud::from_iter_f64(n, |i| [i as f64, 0.0, 1.0]).unwrap();
+    let mut t = PointTable::new(cloud);
+    for (k, name) in ["a", "b", "c"].into_iter().enumerate() {
+        let values = (0..n).map(|i| (10 * i + k) as f64 + 0.5).collect();
+        t.set_property(Property::new(name, Column::F64(values)));
+    }
+    for compressed in [false, true] {
+        let bytes = write_bytes(&t, compressed);
+        let d = extra_bytes_descriptors(&bytes);
+        assert_eq!(bytes[d + 2], 10, "descriptor 0 is an f64");
+        // One descriptor of three f64 (code 30, as laspy writes "3f8") named "normal".
+        let mut array = bytes.clone();
+        array[d + 2] = 30;
+        array[d + 4..d + 36].fill(0);
+        array[d + 4..d + 10].copy_from_slice(b"normal");
+        let back = read_from(Cursor::new(array), Path::new("array.las")).unwrap();
+        for (k, old) in ["a", "b", "c"].into_iter().enumerate() {
+            let name = format!("normal_{k}");
+            assert_eq!(back.property(&name), t.property(old), "{name}");
+        }
+        assert!(back.property("extra_8").is_none());
+        // An Extra Bytes field named like a standard field.
+        let mut twice = bytes.clone();
+        twice[d + 4..d + 36].fill(0);
+        twice[d + 4..d + 13].copy_from_slice(b"intensity");
+        let e = read_from(Cursor::new(twice), Path::new("twice.las")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "twice.las: the property name 'intensity' appears twice"
+        );
+    }
+}
+
+#[test]
+fn las_1_4_counts_take_the_64_bit_count() {
+    let n = 5000;
+    let cloud = PointCloud::from_iter_f64(n, |i| [i as f64 * 0.01, (i % 7) as f64, 0.0]).unwrap();
+    let t = PointTable::new(cloud);
+    for compressed in [false, true] {
+        let mut bytes = write_bytes(&t, compressed);
+        // The legacy count at 107 says 200; the 64-bit count at 247 says 5000.
+        assert_eq!(bytes[247..255], (n as u64).to_le_bytes());
+        bytes[107..111].copy_from_slice(&200u32.to_le_bytes());
+        let back = read_from(Cursor::new(bytes.clone()), Path::new("t.las")).unwrap();
+        assert_eq!(back, t, "compressed: {compressed}");
+        // 2^40 points declared, legacy 0: a clear error, nothing allocated for them.
+        bytes[107..111].copy_from_slice(&0u32.to_le_bytes());
+        bytes[247..255].copy_from_slice(&(1u64 << 40).to_le_bytes());
+        let e = read_from(Cursor::new(bytes), Path::new("huge.las")).unwrap_err();
+        let expected = "huge.las: LAS: point data ends within point";
+        assert!(e.to_string().starts_with(expected), "{e}");
+        assert!(e.to_string().contains("of 1099511627776"), "{e}");
+    }
+}
+
 #[test]
 fn a_point_count_beyond_the_file_fails_early() {
     for (compressed, name) in [(false, "bad.las"), (true, "bad.laz")] {

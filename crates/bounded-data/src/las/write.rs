@@ -200,8 +200,8 @@ fn extra_properties<'a>(
                 return Err(invalid(
                     path,
                     format!(
-                        "property name '{}' is longer than the 32 bytes of a LAS Extra Bytes name",
-                        p.name
+                        "property name {} is longer than the 32 bytes of a LAS Extra Bytes name",
+                        crate::error::quoted(&p.name)
                     ),
                 ));
             }
@@ -438,6 +438,10 @@ fn write_laz<W: Write + Seek + Send + Sync + 'static>(
 ) -> Result<W, DataError> {
     let las = |e| las_error(path, e);
     let options = WriterOptions::default().with_laz_parallelism(LazParallelism::Yes);
+    let out = FailOnce {
+        inner: out,
+        failed: false,
+    };
     let mut writer = Writer::with_options(out, plan.header.clone(), options).map_err(las)?;
     encode_blocks(view, plan, path, laz_block_len(plan.record_len), |block| {
         let data = PointDataBuilder::new()
@@ -447,7 +451,41 @@ fn write_laz<W: Write + Seek + Send + Sync + 'static>(
         writer.write_points(&data).map_err(las)
     })?;
     writer.close().map_err(las)?;
-    writer.into_inner().map_err(las)
+    Ok(writer.into_inner().map_err(las)?.inner)
+}
+
+/// The las writer's output: after its first I/O error (a full disk), every later operation
+/// does nothing and succeeds. The first error reaches the caller through the writer as
+/// usual; without this, dropping the writer after it (it finishes the file when dropped)
+/// failed again and panicked.
+struct FailOnce<W> {
+    inner: W,
+    failed: bool,
+}
+
+impl<W> FailOnce<W> {
+    fn watch<T>(&mut self, done: T, op: impl FnOnce(&mut W) -> std::io::Result<T>) -> std::io::Result<T> {
+        if self.failed {
+            return Ok(done);
+        }
+        op(&mut self.inner).inspect_err(|_| self.failed = true)
+    }
+}
+
+impl<W: Write> Write for FailOnce<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.watch(buf.len(), |w| w.write(buf))
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.watch((), |w| w.flush())
+    }
+}
+
+impl<W: Seek> Seek for FailOnce<W> {
+    fn seek(&mut self, to: SeekFrom) -> std::io::Result<u64> {
+        self.watch(0, |w| w.seek(to))
+    }
 }
 
 /// The input's scale and offset, or for other clouds the bounding-box centre as offset and
@@ -462,8 +500,9 @@ pub(super) fn transforms(view: &TableView<'_>) -> Vector<Transform> {
                 .par_iter()
                 .map(|p| p.map(f32::abs).into_iter().fold(0f32, f32::max))
                 .reduce(|| 0f32, f32::max);
+            let extent = f64::from(extent) * view.cloud.scale();
             // i32 covers +-2.1e9 steps: keep the largest offset below 1e9 steps.
-            let exponent = (f64::from(extent).max(1e-3) / 1e9).log10().ceil();
+            let exponent = (extent.max(1e-3) / 1e9).log10().ceil();
             let s = 10f64.powf(exponent.max(-9.0));
             ([s; 3], view.cloud.origin())
         }
@@ -492,7 +531,7 @@ fn encode_positions(
 ) -> Result<([i32; 3], [i32; 3]), String> {
     const RUN: usize = 256;
     let axes = [t.x, t.y, t.z];
-    let origin = view.cloud.origin();
+    let (origin, unit) = (view.cloud.origin(), view.cloud.scale());
     let n = records.len() / stride;
     let points = &view.cloud.points()[first..first + n];
     let (mut min, mut max) = ([i32::MAX; 3], [i32::MIN; 3]);
@@ -514,7 +553,7 @@ fn encode_positions(
                 }
                 None => {
                     for (s, p) in steps.iter_mut().zip(points) {
-                        *s = (o + f64::from(p[a]) - offset) / scale;
+                        *s = (o + unit * f64::from(p[a]) - offset) / scale;
                     }
                 }
             }
