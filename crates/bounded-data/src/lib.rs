@@ -1,13 +1,16 @@
 //! Point-cloud formats, labelled datasets and the synthetic training-set generator for BoundED.
 //!
-//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, E57.
+//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, E57, and NumPy `.npy`
+//! as input; annotated outputs (the detection results added to the input) in [`annotate`].
 
 mod e57;
 mod error;
 mod labelled;
+mod npy;
 mod records;
 
 pub mod abc;
+pub mod annotate;
 pub mod dataset;
 pub mod format;
 pub mod labels;

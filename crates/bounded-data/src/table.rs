@@ -391,6 +391,9 @@ pub struct PointTable {
     /// them back (`f64` coordinates, or LAS integers finer than `f32` resolves): the
     /// writers use them, so an output never moves a point. `None` for new clouds.
     pub exact_positions: Option<ExactPositions>,
+    /// The header records of a LAS input (CRS, other VLRs, Extra Bytes descriptors), which a
+    /// LAS output carries over; `None` for other inputs.
+    pub las_header: Option<crate::las::InputHeader>,
 }
 
 /// Input positions kept beside the cloud, in the input's own form: LAS integers take half
@@ -469,6 +472,7 @@ impl PointTable {
             cloud,
             properties: Vec::new(),
             exact_positions: None,
+            las_header: None,
         }
     }
 
@@ -513,6 +517,7 @@ impl PointTable {
             position_type: self.position_type,
             properties: self.properties.iter().collect(),
             exact_positions: self.exact_positions.as_ref(),
+            las_header: self.las_header.as_ref(),
         }
     }
 }
@@ -531,6 +536,8 @@ pub struct TableView<'a> {
     pub properties: Vec<&'a Property>,
     /// The input's exact positions, if the table keeps them (see [`PointTable`]).
     pub exact_positions: Option<&'a ExactPositions>,
+    /// The LAS input's header records, for a LAS output (see [`PointTable`]).
+    pub las_header: Option<&'a crate::las::InputHeader>,
 }
 
 impl TableView<'_> {
@@ -649,6 +656,7 @@ pub(crate) fn from_properties(
             position_type: PositionType::F32,
             properties,
             exact_positions: None,
+            las_header: None,
         });
     }
     // A typed fast path for doubles: no per-value dispatch in the hot loops.
@@ -664,6 +672,7 @@ pub(crate) fn from_properties(
         position_type: PositionType::F64,
         properties,
         exact_positions,
+        las_header: None,
     })
 }
 

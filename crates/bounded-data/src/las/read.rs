@@ -1,5 +1,6 @@
 //! Reading: the header through the `las` crate, the records in blocks decoded in parallel.
 
+use super::header::InputHeader;
 use super::las_error;
 use super::layout::*;
 use crate::DataError;
@@ -48,7 +49,11 @@ pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     } else {
         read_las(input, blocks, &slots, path)?
     };
-    into_table(header.transforms(), names, &slots, decoded, path)
+    let mut table = into_table(header.transforms(), names, &slots, decoded, path)?;
+    let input = InputHeader::of(&header).map_err(|e| las_error(path, e))?;
+    apply_scaling(&mut table.properties, &input.descriptors);
+    table.las_header = Some(input);
+    Ok(table)
 }
 
 /// Checks that every extended VLR fits in the file, then rewinds `input`: the las crate
@@ -312,6 +317,7 @@ fn into_table(
         },
         properties,
         exact_positions,
+        las_header: None,
     })
 }
 
