@@ -273,3 +273,56 @@ fn directory_outputs_refuse_clashing_or_replacing_outputs() {
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(dir.path().join("single/t.ply").is_file());
 }
+
+#[test]
+fn the_input_is_never_replaced_and_bad_thread_counts_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.ply");
+    format::write(&input, &PointTable::new(box_cloud(600, 2).cloud)).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    let link = dir.path().join("link.ply");
+    std::fs::hard_link(&input, &link).unwrap();
+    let spelled = dir.path().join(".").join("in.ply");
+    for output in [&input, &link, &spelled] {
+        let run = bounded_paths(&[&"detect", &input, &"-o", output]);
+        assert!(!run.status.success(), "{}", output.display());
+        assert!(stderr(&run).contains("is this input"), "{}", stderr(&run));
+    }
+    // Into the input's own directory under its own name: refused as well.
+    let run = bounded_paths(&[&"detect", &input, &link, &"-o", &dir.path()]);
+    assert!(!run.status.success() && stderr(&run).contains("is this input"));
+    assert_eq!(std::fs::read(&input).unwrap(), before, "input changed");
+
+    // `--format .las` is the extension las.
+    let out = dir.path().join("out");
+    let into = format!("{}/", out.display());
+    let run = bounded_paths(&[&"detect", &input, &"-o", &into, &"--format", &".las"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(out.join("in.las").is_file() && !out.join("in..las").exists());
+
+    for threads in ["0", "100000"] {
+        let run = bounded_paths(&[&"--threads", &threads, &"detect", &input, &"-o", &out]);
+        assert!(!run.status.success(), "--threads {threads} accepted");
+        assert!(stderr(&run).contains("thread"), "{}", stderr(&run));
+    }
+}
+
+#[test]
+fn a_failed_output_names_those_written_before_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = PointTable::new(box_cloud(600, 2).cloud);
+    let (a, b) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
+    format::write(&a, &table).unwrap();
+    format::write(&b, &table).unwrap();
+    let out = dir.path().join("out");
+    // The second output's path is taken by a directory: its write fails.
+    std::fs::create_dir_all(out.join("b.ply")).unwrap();
+    let run = bounded_paths(&[&"detect", &a, &b, &"-o", &out]);
+    let err = stderr(&run);
+    assert!(!run.status.success(), "{err}");
+    assert!(err.contains("1 of 2 outputs were written"), "{err}");
+    assert!(
+        err.contains("a.ply") && out.join("a.ply").is_file(),
+        "{err}"
+    );
+}

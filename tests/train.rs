@@ -1,6 +1,6 @@
 //! `bounded train` on a small generated set: the model file records the requested network,
 //! `detect` runs with it (a two-stage one's second stage too), the noise options reach the
-//! generated sets, and a bad width or noise level fails before any work.
+//! generated sets, ABC models are read, and a bad width or noise level fails before any work.
 
 mod common;
 
@@ -194,4 +194,83 @@ fn bad_options_are_refused_before_training() {
         assert!(err.contains(expected) && !err.contains("panicked"), "{err}");
         assert!(!model.exists());
     }
+}
+
+/// Writes an ABC-style model: a `width` x `height` grid of vertices folded at a right angle
+/// along the column `u = fold`, as an OBJ mesh and a features YAML naming that column a sharp
+/// curve. Its labels: `height` sharp vertices (the fold), `2 (width + height) - 6` boundary
+/// ones (the rim but the fold's two ends), the rest non-edge.
+fn write_abc_model(dir: &Path, id: &str, width: usize, height: usize, fold: usize) {
+    std::fs::create_dir_all(dir).unwrap();
+    let index = |u: usize, v: usize| v * width + u + 1;
+    let mut obj = String::from("# folded sheet\n");
+    for v in 0..height {
+        for u in 0..width {
+            let (x, z) = if u <= fold { (u, 0) } else { (fold, u - fold) };
+            obj.push_str(&format!("v {x} {v} {z}\n"));
+        }
+    }
+    for v in 0..height - 1 {
+        for u in 0..width - 1 {
+            let (a, b, c, d) = (
+                index(u, v),
+                index(u + 1, v),
+                index(u + 1, v + 1),
+                index(u, v + 1),
+            );
+            obj.push_str(&format!("f {a} {b} {c}\nf {a} {c} {d}\n"));
+        }
+    }
+    let fold_column: Vec<String> = (0..height)
+        .map(|v| (index(fold, v) - 1).to_string())
+        .collect();
+    let yaml = format!(
+        "curves:\n- sharp: true\n  type: Line\n  vert_indices: [{}]\nsurfaces: []\n",
+        fold_column.join(", ")
+    );
+    std::fs::write(dir.join(format!("{id}_trimesh_000.obj")), obj).unwrap();
+    std::fs::write(dir.join(format!("{id}_features_000.yml")), yaml).unwrap();
+}
+
+#[test]
+fn abc_models_are_a_training_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let abc = dir.path().join("abc");
+    write_abc_model(&abc.join("00000001"), "00000001", 20, 20, 10);
+    write_abc_model(&abc.join("00000002"), "00000002", 24, 20, 12);
+    let model = dir.path().join("abc.bmodel");
+    let data = format!("abc:{}", abc.display());
+    let run = bounded_paths(&[
+        &"train",
+        &"--data",
+        &data,
+        &"--scales",
+        &"16,8",
+        &"--iterations",
+        &"5",
+        &"--runs",
+        &"1",
+        &"-o",
+        &model,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    // 20 x 20 + 24 x 20 points; sharp 20 + 20; boundary (2 * 40 - 6) + (2 * 44 - 6).
+    let err = stderr(&run);
+    assert!(
+        err.contains("2 clouds, 880 points (40 sharp, 156 boundary)"),
+        "{err}"
+    );
+    assert_eq!(ModelFile::load(&model).unwrap().scales, vec![16, 8]);
+
+    // A mesh without its features file is refused, naming it, before any model is written.
+    std::fs::remove_file(abc.join("00000002/00000002_features_000.yml")).unwrap();
+    std::fs::remove_file(&model).unwrap();
+    let run = bounded_paths(&[&"train", &"--data", &data, &"-o", &model]);
+    let err = stderr(&run);
+    assert!(!run.status.success());
+    assert!(
+        err.contains("00000002_trimesh_000.obj: no features file"),
+        "{err}"
+    );
+    assert!(!model.exists());
 }

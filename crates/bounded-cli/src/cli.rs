@@ -1,5 +1,6 @@
 //! Command-line arguments.
 
+use bounded_data::synth::NoiseDirection;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
@@ -8,12 +9,31 @@ use std::path::PathBuf;
 #[derive(Debug, Parser)]
 #[command(name = "bounded", version, about, long_about = None)]
 pub struct Cli {
-    /// Worker threads (default: all cores).
-    #[arg(long, global = true)]
+    /// Worker threads (default: all cores; at most 8 per core).
+    #[arg(long, global = true, value_parser = threads)]
     pub threads: Option<usize>,
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// Threads per core beyond which `--threads` is refused: more only add switching (1000
+/// threads on 5,000 points took 10 s instead of a fraction of one).
+const THREADS_PER_CORE: usize = 8;
+
+/// Parses `--threads`: at least 1, at most [`THREADS_PER_CORE`] per core of this machine.
+fn threads(arg: &str) -> Result<usize, String> {
+    let n: usize = arg.parse().map_err(|e| format!("{e}"))?;
+    let cores = std::thread::available_parallelism().map_or(1, NonZeroUsize::get);
+    let most = THREADS_PER_CORE * cores;
+    match n {
+        0 => Err("at least 1 thread is needed".into()),
+        n if n > most => Err(format!(
+            "{n} threads on {cores} cores would only add switching; at most {most} \
+             ({THREADS_PER_CORE} per core)"
+        )),
+        n => Ok(n),
+    }
 }
 
 /// The subcommands.
@@ -73,6 +93,12 @@ pub struct DetectArgs {
     /// clouds.
     #[arg(long)]
     pub fast: bool,
+    /// How readily a point is called a sharp edge, strictly between 0 and 1: sharp where
+    /// p_sharp reaches 1 - SENSITIVITY (and p_boundary does not exceed it). Without it, the
+    /// most probable class. `bounded eval --sensitivity` scores a choice on labelled clouds;
+    /// the bench prints MCC against it for every evaluation set.
+    #[arg(long)]
+    pub sensitivity: Option<f32>,
     /// Leave out points with a NaN or infinite coordinate (such as the invalid pixels of
     /// organised PCL clouds, or the no-return points of E57 scans) instead of refusing the
     /// file; the output holds the other points.
@@ -88,8 +114,9 @@ pub struct DetectArgs {
 /// Arguments of `train`.
 #[derive(Debug, Args)]
 pub struct TrainArgs {
-    /// Training data: directories of labelled clouds, or `generated:KIND:SEED[:SHAPES]` for a
-    /// synthetic set made on the fly. Repeat to combine.
+    /// Training data: directories of labelled clouds, `abc:DIR` for ABC models (OBJ meshes
+    /// beside their features YAML files), or `generated:KIND:SEED[:SHAPES]` for a synthetic
+    /// set made on the fly. Repeat to combine.
     #[arg(long, required = true)]
     pub data: Vec<String>,
     /// Output model file.
@@ -166,6 +193,9 @@ pub struct EvalArgs {
     /// Score the first network of a two-stage model alone (as `detect --fast`).
     #[arg(long)]
     pub fast: bool,
+    /// The decision threshold (as `detect --sensitivity`).
+    #[arg(long)]
+    pub sensitivity: Option<f32>,
 }
 
 /// The positive class of binary scores.
@@ -215,6 +245,15 @@ pub enum NoiseAlong {
     Any,
     /// The surface normal only (range noise of scanners, as in the noisy ABC sample).
     Normal,
+}
+
+impl From<NoiseAlong> for NoiseDirection {
+    fn from(along: NoiseAlong) -> Self {
+        match along {
+            NoiseAlong::Any => NoiseDirection::Isotropic,
+            NoiseAlong::Normal => NoiseDirection::Normal,
+        }
+    }
 }
 
 /// Arguments of `render`.

@@ -4,14 +4,10 @@
 //! (bounded-data for files, bounded-features for the statistics, bounded-nn for the classifier).
 
 mod atomic;
-mod canvas;
 mod cli;
 mod commands;
-mod peers;
 mod pipeline;
-mod plot;
 mod progress;
-mod render;
 
 use clap::Parser;
 

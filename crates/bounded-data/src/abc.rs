@@ -10,6 +10,11 @@
 //! skipped), and from the YAML the `curves:` list with each curve's `sharp:` flag and
 //! `vert_indices:` (0-based, block `- 1` or flow `[1, 2]` lists).
 //!
+//! A directory of models ([`load_dir`], `bounded train --data abc:DIR`) pairs every OBJ file
+//! in it or below it with the features file beside it: the OBJ's name with its last
+//! `trimesh` replaced by `features` (the ABC naming: `00000006_trimesh_000.obj`,
+//! `00000006_features_000.yml`) or unchanged, ending in `.yml` or `.yaml`.
+//!
 //! ```no_run
 //! let cloud = bounded_data::abc::load(
 //!     "abc/00000006_trimesh_000.obj".as_ref(),
@@ -22,7 +27,7 @@
 use crate::{DataError, LabelledCloud};
 use bounded_geom::{Class, PointCloud};
 use std::io::{BufRead, BufReader};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Loads an ABC model: `obj_path` (the mesh) and `yaml_path` (its features file).
 pub fn load(obj_path: &Path, yaml_path: &Path) -> Result<LabelledCloud, DataError> {
@@ -51,6 +56,61 @@ pub fn load(obj_path: &Path, yaml_path: &Path) -> Result<LabelledCloud, DataErro
         source,
     })?;
     Ok(LabelledCloud { cloud, labels })
+}
+
+/// Loads every ABC model in `dir` and its subdirectories (see the module docs for how a mesh
+/// finds its features file), in path order, each named by its OBJ file's stem.
+pub fn load_dir(dir: &Path) -> Result<Vec<(String, LabelledCloud)>, DataError> {
+    let mut meshes = Vec::new();
+    find_meshes(dir, &mut meshes)?;
+    if meshes.is_empty() {
+        return Err(DataError::Dataset {
+            path: dir.to_path_buf(),
+            what: "no ABC meshes (.obj files) found".into(),
+        });
+    }
+    meshes.sort();
+    (meshes.iter())
+        .map(|obj| Ok((crate::dataset::stem(obj), load(obj, &features_file(obj)?)?)))
+        .collect()
+}
+
+/// Adds the `.obj` files in `dir` and below it (symbolic links not followed) to `meshes`.
+fn find_meshes(dir: &Path, meshes: &mut Vec<PathBuf>) -> Result<(), DataError> {
+    let io = |source| DataError::io(dir, source);
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let entry = entry.map_err(io)?;
+        let path = entry.path();
+        if entry.file_type().map_err(io)?.is_dir() {
+            find_meshes(&path, meshes)?;
+        } else if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        {
+            meshes.push(path);
+        }
+    }
+    Ok(())
+}
+
+/// The features file beside the mesh `obj`.
+fn features_file(obj: &Path) -> Result<PathBuf, DataError> {
+    let stem = obj.file_stem().unwrap_or_default().to_string_lossy();
+    let renamed = match stem.rfind("trimesh") {
+        Some(i) => format!("{}features{}", &stem[..i], &stem[i + "trimesh".len()..]),
+        None => stem.to_string(),
+    };
+    let candidates =
+        [&renamed, &stem.to_string()].map(|s| [format!("{s}.yml"), format!("{s}.yaml")]);
+    (candidates.iter().flatten())
+        .map(|name| obj.with_file_name(name))
+        .find(|path| path.is_file())
+        .ok_or_else(|| {
+            malformed(
+                obj,
+                format!("no features file beside it (expected {renamed}.yml or {renamed}.yaml)"),
+            )
+        })
 }
 
 fn malformed(path: &Path, what: impl Into<String>) -> DataError {
@@ -495,5 +555,32 @@ surfaces:
         .unwrap_err();
         assert!(matches!(e, DataError::Io { .. }));
         assert!(e.to_string().starts_with("/nonexistent/m.obj"), "{e}");
+    }
+
+    #[test]
+    fn a_directory_pairs_each_mesh_with_its_features_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let sharp = "curves:\n- sharp: true\n  vert_indices: [0]\n";
+        write(&dir, "00000002_trimesh_001.obj", OPEN_BOX);
+        write(&dir, "00000002_features_001.yml", sharp);
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        write(&dir, "sub/plain.OBJ", OPEN_BOX);
+        write(&dir, "sub/plain.yaml", "curves: []\n");
+        write(&dir, "notes.txt", "not a mesh");
+        let models = load_dir(dir.path()).unwrap();
+        let names: Vec<&str> = models.iter().map(|m| m.0.as_str()).collect();
+        assert_eq!(names, ["00000002_trimesh_001", "plain"]);
+        assert_eq!(models[0].1.class_counts(), [4, 1, 4]);
+        assert_eq!(models[1].1.class_counts(), [5, 0, 4]);
+
+        write(&dir, "lone.obj", OPEN_BOX);
+        let e = load_dir(dir.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("lone.obj: no features file beside it (expected lone.yml"),
+            "{e}"
+        );
+        let empty = tempfile::tempdir().unwrap();
+        let e = load_dir(empty.path()).unwrap_err().to_string();
+        assert!(e.contains("no ABC meshes"), "{e}");
     }
 }

@@ -15,7 +15,9 @@
 //! assert_eq!(Role::parse("train"), Some(Role::Train));
 //! ```
 
-use crate::DataError;
+use crate::labels::{self, Convention};
+use crate::synth::SetConfig;
+use crate::{DataError, LabelledCloud, abc, format};
 use bounded_geom::Class;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -169,6 +171,115 @@ pub fn cloud_files(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
     Ok(files)
 }
 
+/// The clouds of dataset `dir` that have one of `roles`; a directory without roles (no
+/// `manifest.txt`, no `train/`, `validation/`, `evaluation/`) holds only clouds of those roles.
+pub fn files(dir: &Path, roles: &[Role]) -> Result<Vec<PathBuf>, DataError> {
+    if !dir.is_dir() {
+        return Err(DataError::Dataset {
+            path: dir.to_path_buf(),
+            what: "not a directory".into(),
+        });
+    }
+    let manifest = Manifest::open(dir)?;
+    let files = if manifest.entries.is_empty() {
+        cloud_files(dir)?
+    } else {
+        (roles.iter())
+            .flat_map(|&r| manifest.with_role(r).map(Path::to_path_buf))
+            .collect()
+    };
+    if files.is_empty() {
+        return Err(DataError::Dataset {
+            path: dir.to_path_buf(),
+            what: "no point-cloud files found".into(),
+        });
+    }
+    Ok(files)
+}
+
+/// Reads a labelled cloud, detecting its label convention: a `class` or `label` property
+/// if present; otherwise the PCEDNet colours (smooth edges as `smooth_edge`), and the
+/// Bazazian colours when a colour outside PCEDNet's palette appears.
+pub fn read_labelled(path: &Path, smooth_edge: Class) -> Result<LabelledCloud, DataError> {
+    let table = format::read(path)?;
+    if labels::class_column(&table).is_some() {
+        return labels::from_table(table, Convention::ClassProperty, path);
+    }
+    if table.property("red").is_none() {
+        return Err(DataError::malformed(
+            path,
+            "no labels: neither a 'class' or 'label' property nor label colours \
+             (red, green, blue as in the PCEDNet or Bazazian clouds)",
+        ));
+    }
+    let pcednet = Convention::Pcednet { smooth_edge };
+    labels::from_table(table.clone(), pcednet, path).or_else(|pcednet_error| {
+        labels::from_table(table, Convention::Bazazian, path).map_err(|_| pcednet_error)
+    })
+}
+
+/// The labelled clouds of dataset `dir` that have one of `roles` (see [`files`]), named by
+/// their file stems; calls `progress(clouds read, clouds)` after each.
+pub fn load(
+    dir: &Path,
+    roles: &[Role],
+    smooth_edge: Class,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<(String, LabelledCloud)>, DataError> {
+    let files = files(dir, roles)?;
+    let mut clouds = Vec::with_capacity(files.len());
+    for path in &files {
+        clouds.push((stem(path), read_labelled(path, smooth_edge)?));
+        progress(clouds.len(), files.len());
+    }
+    Ok(clouds)
+}
+
+/// The stem of `path`, naming a cloud in tables.
+pub(crate) fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+/// Where training clouds come from, parsed from a spec (`bounded train --data`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum TrainingSource {
+    /// A dataset directory: its train and validation clouds (a directory without roles: all).
+    Dataset(PathBuf),
+    /// `abc:DIR`: ABC models, OBJ meshes beside their features YAML (see [`abc::load_dir`]).
+    Abc(PathBuf),
+    /// `generated:KIND:SEED[:SHAPES]`: a generated set (see [`SetConfig::from_spec`]).
+    Generated(SetConfig),
+}
+
+impl TrainingSource {
+    /// Parses `spec`: `generated:KIND:SEED[:SHAPES]`, `abc:DIR`, else a dataset directory.
+    pub fn parse(spec: &str) -> Result<TrainingSource, DataError> {
+        if spec.starts_with("generated:") {
+            return Ok(TrainingSource::Generated(SetConfig::from_spec(spec)?));
+        }
+        Ok(match spec.strip_prefix("abc:") {
+            Some(dir) => TrainingSource::Abc(dir.into()),
+            None => TrainingSource::Dataset(spec.into()),
+        })
+    }
+
+    /// The named labelled clouds of this source.
+    pub fn load(&self) -> Result<Vec<(String, LabelledCloud)>, DataError> {
+        match self {
+            TrainingSource::Dataset(dir) => load(
+                dir,
+                &[Role::Train, Role::Validation],
+                Class::NonEdge,
+                &mut |_, _| {},
+            ),
+            TrainingSource::Abc(dir) => abc::load_dir(dir),
+            TrainingSource::Generated(config) => crate::synth::generate(config),
+        }
+    }
+}
+
 /// The validation sample: [`VALIDATION_PER_CLASS`] random points of each class (all of a
 /// class that has fewer), as sorted indices into `labels`; the same seed gives the same sample.
 ///
@@ -199,6 +310,7 @@ pub fn validation_sample_with(labels: &[Class], per_class: [usize; 3], seed: u64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::synth::{NoiseDirection, SetKind};
 
     fn labels() -> Vec<Class> {
         // Interleaved classes: 5000 non-edge, 50 sharp, 300 boundary.
@@ -284,5 +396,97 @@ mod tests {
         std::fs::write(&path, "train\n").unwrap();
         let e = Manifest::read(&path).unwrap_err().to_string();
         assert!(e.contains("line 1: expected `<role> <path>`"), "{e}");
+    }
+
+    #[test]
+    fn generated_specs_parse_or_say_what_is_wrong() {
+        let config = SetConfig::from_spec("generated:boundary:7").unwrap();
+        assert_eq!(config, SetConfig::new(SetKind::Boundary, 7, 60));
+        assert_eq!(SetConfig::from_spec("generated:cad:1:5").unwrap().shapes, 5);
+        for (spec, expected) in [
+            ("generated:cad", "expected generated:KIND:SEED[:SHAPES]"),
+            (
+                "generated:cad:1:2:3",
+                "expected generated:KIND:SEED[:SHAPES]",
+            ),
+            (
+                "generated:cube:1",
+                "unknown set kind \"cube\" (cad, random, boundary, mixed)",
+            ),
+            ("generated:cad:x", "bad seed"),
+            (
+                "generated:cad:1:0",
+                "shape count must be a whole number above 0",
+            ),
+            (
+                "generated:cad:1:-3",
+                "shape count must be a whole number above 0",
+            ),
+        ] {
+            let e = SetConfig::from_spec(spec).unwrap_err();
+            assert!(matches!(e, DataError::Generator { .. }), "{spec}: {e}");
+            assert!(e.to_string().contains(expected), "{spec}: {e}");
+        }
+    }
+
+    #[test]
+    fn noise_options_replace_the_levels_or_keep_them_and_are_checked() {
+        let config = SetConfig::new(SetKind::Cad, 1, 2);
+        let normal = (config.clone())
+            .with_noise(None, NoiseDirection::Normal)
+            .unwrap();
+        assert_eq!(normal.noise_levels, config.noise_levels);
+        assert_eq!(normal.noise_direction, NoiseDirection::Normal);
+        let levels = [0.0, 1.5];
+        let set = (config.clone())
+            .with_noise(Some(&levels), NoiseDirection::Isotropic)
+            .unwrap();
+        assert_eq!(set.noise_levels, levels);
+        let e = config
+            .with_noise(Some(&[0.1, -1.0]), NoiseDirection::Isotropic)
+            .unwrap_err();
+        assert!(e.to_string().contains("noise level -1"), "{e}");
+    }
+
+    #[test]
+    fn files_of_a_plain_directory_or_what_is_missing() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = files(&dir.path().join("none"), &Role::ALL).unwrap_err();
+        assert!(e.to_string().ends_with("none: not a directory"), "{e}");
+        let e = files(dir.path(), &Role::ALL).unwrap_err();
+        assert!(e.to_string().ends_with("no point-cloud files found"), "{e}");
+        for name in ["b.ply", "a.xyz", "notes.md"] {
+            std::fs::write(dir.path().join(name), "").unwrap();
+        }
+        let found = files(dir.path(), &[Role::Evaluation]).unwrap();
+        assert_eq!(found, [dir.path().join("a.xyz"), dir.path().join("b.ply")]);
+    }
+
+    #[test]
+    fn labelled_clouds_by_class_property_or_refused_without_labels() {
+        let dir = tempfile::tempdir().unwrap();
+        let cloud = bounded_geom::PointCloud::from_f64(&[[0.0; 3], [1.0, 0.0, 0.0]]).unwrap();
+        let labels = vec![Class::Boundary, Class::Sharp];
+        let labelled = LabelledCloud { cloud, labels };
+        format::write_labelled(&dir.path().join("a.ply"), &labelled).unwrap();
+        std::fs::write(dir.path().join("plain.xyz"), "0 0 0\n1 0 0\n").unwrap();
+        let e = read_labelled(&dir.path().join("plain.xyz"), Class::NonEdge).unwrap_err();
+        assert!(e.to_string().contains("plain.xyz: no labels"), "{e}");
+        std::fs::remove_file(dir.path().join("plain.xyz")).unwrap();
+        let loaded = load(dir.path(), &[Role::Train], Class::NonEdge, &mut |_, _| {}).unwrap();
+        assert_eq!(loaded, [("a".to_string(), labelled)]);
+    }
+
+    #[test]
+    fn training_sources_by_prefix() {
+        let parse = |spec| TrainingSource::parse(spec).unwrap();
+        assert_eq!(parse("abc:models"), TrainingSource::Abc("models".into()));
+        assert_eq!(
+            parse("data/set"),
+            TrainingSource::Dataset("data/set".into())
+        );
+        let generated = TrainingSource::Generated(SetConfig::new(SetKind::Cad, 1, 2));
+        assert_eq!(parse("generated:cad:1:2"), generated);
+        assert!(TrainingSource::parse("generated:cad").is_err());
     }
 }

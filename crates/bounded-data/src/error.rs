@@ -61,6 +61,22 @@ pub enum DataError {
         /// What is inconsistent.
         what: String,
     },
+    /// A picture could not be encoded as PNG.
+    #[error("{path}: cannot write the PNG picture: {source}")]
+    Png {
+        /// The picture file.
+        path: PathBuf,
+        /// The encoder's error.
+        source: png::EncodingError,
+    },
+    /// A dataset directory that is missing or holds no clouds.
+    #[error("{path}: {what}")]
+    Dataset {
+        /// The directory.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
+    },
 }
 
 impl DataError {

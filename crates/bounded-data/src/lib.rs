@@ -1,4 +1,5 @@
-//! Point-cloud formats, labelled datasets and the synthetic training-set generator for BoundED.
+//! Point-cloud formats, labelled datasets, pictures and the synthetic training-set generator
+//! for BoundED.
 //!
 //! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, E57, and NumPy `.npy`
 //! as input; annotated outputs (the detection results added to the input) in [`annotate`].
@@ -16,6 +17,8 @@ pub mod format;
 pub mod labels;
 pub mod las;
 pub mod pcd;
+pub mod peers;
+pub mod picture;
 pub mod ply;
 pub mod synth;
 pub mod table;

@@ -10,6 +10,13 @@
 //! along the surface normal only; labels stay those of the clean points) and a few outliers
 //! (non-edge).
 //!
+//! The free-form kind ([`SetKind::Freeform`], see [`generate_freeform`]) is built
+//! differently: smooth parametric bases (height fields, bent and twisted sheets, shells)
+//! displaced along their normal by groove, ridge and step profiles swept along curves, so
+//! the kinks are known exactly; it is labelled by a [`LabelRule`] (kinks of at least 10
+//! degrees on features at least a quarter spacing deep, in a band of 1 spacing either
+//! side by default) and sampled at random, as blue noise or in scan lines.
+//!
 //! Generation is deterministic: shape `i` of a set draws from its own ChaCha8 stream of the
 //! set's seed, so the same configuration gives the same clouds bit for bit, in parallel or
 //! not, and a set can be extended without changing its first shapes.
@@ -28,17 +35,24 @@
 //! assert_eq!(cloud.labels.len(), cloud.cloud.len());
 //! ```
 
+mod freeform;
 mod grid;
 mod mesh;
 mod perturb;
 mod polyhedron;
 mod profile;
+mod relief;
 mod sample;
+mod scan;
+mod segments;
 mod shapes;
 mod vec3;
 
+pub use freeform::{BaseKind, FreeformSpec, generate_freeform};
 pub use perturb::NoiseDirection;
+pub use relief::LabelRule;
 pub use sample::{Sampling, W_BORDER, W_SHARP};
+pub use scan::FreeformSampling;
 pub use shapes::ShapeKind;
 
 use crate::{DataError, LabelledCloud};
@@ -61,6 +75,10 @@ pub enum SetKind {
     Boundary,
     /// Every shape equally often, both samplings.
     Mixed,
+    /// Free-form surfaces (height fields, bent and twisted sheets, shells) carrying
+    /// grooves, ridges, steps and reliefs along curves, labelled by a [`LabelRule`];
+    /// random, blue-noise and scan-line sampling (see [`generate_freeform`]).
+    Freeform,
 }
 
 impl SetKind {
@@ -71,6 +89,7 @@ impl SetKind {
             SetKind::Random => "random",
             SetKind::Boundary => "boundary",
             SetKind::Mixed => "mixed",
+            SetKind::Freeform => "freeform",
         }
     }
 
@@ -94,6 +113,8 @@ impl SetKind {
             SetKind::Boundary if shape.is_open() => 2.0,
             SetKind::Boundary => 0.4,
             SetKind::Mixed => 1.0,
+            // Free-form sets hold no mesh shapes (see `SetConfig::spec`).
+            SetKind::Freeform => 0.0,
         }
     }
 
@@ -102,7 +123,7 @@ impl SetKind {
             SetKind::Cad => Sampling::MeshVertex,
             SetKind::Random => Sampling::Random,
             SetKind::Boundary | SetKind::Mixed if rng.random_bool(0.5) => Sampling::MeshVertex,
-            SetKind::Boundary | SetKind::Mixed => Sampling::Random,
+            SetKind::Boundary | SetKind::Mixed | SetKind::Freeform => Sampling::Random,
         }
     }
 }
@@ -136,6 +157,8 @@ pub struct SetConfig {
     pub noise_direction: NoiseDirection,
     /// Fraction of outliers added to the 30% of shapes that get any.
     pub outlier_fraction: f64,
+    /// The labels of the free-form kind (the mesh kinds keep theirs: see [`Sampling`]).
+    pub label_rule: LabelRule,
 }
 
 impl SetConfig {
@@ -152,30 +175,64 @@ impl SetConfig {
             noise_levels: vec![0.0, 0.1, 0.2, 0.4, 0.6],
             noise_direction: NoiseDirection::Isotropic,
             outlier_fraction: 0.002,
+            label_rule: LabelRule::default(),
         }
     }
 
-    /// Checks the noise levels and the outlier fraction; [`generate`] does, so a caller
-    /// writing files can check before creating any.
+    /// Checks the noise levels, the outlier fraction and the label rule; [`generate`]
+    /// does, so a caller writing files can check before creating any.
     pub fn validate(&self) -> Result<(), DataError> {
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
-        check_outlier_fraction(self.outlier_fraction)
+        check_outlier_fraction(self.outlier_fraction)?;
+        self.label_rule.validate()
     }
 
-    /// The parameters of shape `index`, drawn from the set's seed.
-    pub fn spec(&self, index: usize) -> ShapeSpec {
+    /// The parameters of cloud `index`, drawn from the set's seed.
+    pub fn spec(&self, index: usize) -> CloudSpec {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(index as u64);
-        let total: f64 = ShapeKind::ALL.iter().map(|&s| self.kind.weight(s)).sum();
+        if self.kind == SetKind::Freeform {
+            CloudSpec::Freeform(self.freeform_spec(&mut rng))
+        } else {
+            CloudSpec::Mesh(self.mesh_spec(&mut rng))
+        }
+    }
+
+    /// A free-form cloud: the base by weight, then its sampling (scan lines on sheets
+    /// only), points, noise and outliers.
+    fn freeform_spec(&self, rng: &mut ChaCha8Rng) -> FreeformSpec {
+        let total: f64 = BaseKind::ALL.iter().map(|b| b.weight()).sum();
         let mut pick = rng.random::<f64>() * total;
-        let kind = ShapeKind::ALL
+        let base = BaseKind::ALL
             .into_iter()
-            .find(|&s| {
-                pick -= self.kind.weight(s);
+            .find(|b| {
+                pick -= b.weight();
                 pick < 0.0
             })
-            .unwrap_or(ShapeKind::Box);
-        let sampling = self.kind.sampling(&mut rng);
+            .unwrap_or(BaseKind::HeightField);
+        let x = rng.random::<f64>();
+        let sampling = if base.is_sheet() && x < 0.4 {
+            FreeformSampling::Scan
+        } else if x < 0.7 {
+            FreeformSampling::BlueNoise
+        } else {
+            FreeformSampling::Random
+        };
+        let (points, noise, outlier_fraction) = self.amounts(rng);
+        FreeformSpec {
+            base,
+            sampling,
+            points,
+            noise,
+            noise_direction: self.noise_direction,
+            outlier_fraction,
+            label_rule: self.label_rule,
+            seed: rng.random(),
+        }
+    }
+
+    /// Points, noise level and outlier fraction of one cloud.
+    fn amounts(&self, rng: &mut ChaCha8Rng) -> (usize, f64, f64) {
         let (lo, hi) = (*self.points.start(), *self.points.end());
         let points = if lo < hi {
             rng.random_range(lo..=hi)
@@ -192,6 +249,22 @@ impl SetConfig {
         } else {
             0.0
         };
+        (points, noise, outlier_fraction)
+    }
+
+    /// A mesh shape: the kind by the set's weights, then sampling, points, noise, outliers.
+    fn mesh_spec(&self, rng: &mut ChaCha8Rng) -> ShapeSpec {
+        let total: f64 = ShapeKind::ALL.iter().map(|&s| self.kind.weight(s)).sum();
+        let mut pick = rng.random::<f64>() * total;
+        let kind = ShapeKind::ALL
+            .into_iter()
+            .find(|&s| {
+                pick -= self.kind.weight(s);
+                pick < 0.0
+            })
+            .unwrap_or(ShapeKind::Box);
+        let sampling = self.kind.sampling(rng);
+        let (points, noise, outlier_fraction) = self.amounts(rng);
         ShapeSpec {
             kind,
             sampling,
@@ -203,15 +276,23 @@ impl SetConfig {
         }
     }
 
-    /// The name of shape `index`: `<set>_<index>_<shape>_<sampling>`.
-    pub fn name(&self, index: usize, spec: &ShapeSpec) -> String {
-        format!(
-            "{}_{index:06}_{}_{}",
-            self.kind.name(),
-            spec.kind.name(),
-            spec.sampling.name()
-        )
+    /// The name of cloud `index`: `<set>_<index>_<shape or base>_<sampling>`.
+    pub fn name(&self, index: usize, spec: &CloudSpec) -> String {
+        let (shape, sampling) = match spec {
+            CloudSpec::Mesh(s) => (s.kind.name(), s.sampling.name()),
+            CloudSpec::Freeform(s) => (s.base.name(), s.sampling.name()),
+        };
+        format!("{}_{index:06}_{shape}_{sampling}", self.kind.name())
     }
+}
+
+/// Everything that defines one cloud of a set.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CloudSpec {
+    /// A mesh shape (every kind but the free-form one).
+    Mesh(ShapeSpec),
+    /// A free-form surface.
+    Freeform(FreeformSpec),
 }
 
 /// Everything that defines one generated cloud.
@@ -250,7 +331,11 @@ pub fn generate_one(
 ) -> Result<(String, LabelledCloud), DataError> {
     let spec = config.spec(index);
     let name = config.name(index, &spec);
-    let cloud = generate_shape(&spec).map_err(|e| match e {
+    let cloud = match &spec {
+        CloudSpec::Mesh(s) => generate_shape(s),
+        CloudSpec::Freeform(s) => generate_freeform(s),
+    };
+    let cloud = cloud.map_err(|e| match e {
         DataError::Geom { source, .. } => DataError::Geom {
             path: name.clone().into(),
             source,
@@ -269,7 +354,7 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     check_outlier_fraction(spec.outlier_fraction)?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut mesh = spec.kind.build(&mut rng);
-    let pose = Pose::random(&mut rng);
+    let pose = Pose::random(&mut rng, 1.25);
     mesh.map(|p| pose.apply(p));
     let mesh = mesh.welded();
     let features = mesh.features();
@@ -321,26 +406,81 @@ fn check_outlier_fraction(fraction: f64) -> Result<(), DataError> {
 }
 
 /// A random similarity plus a mild anisotropic stretch.
-struct Pose {
+pub(crate) struct Pose {
     /// Rotation times stretch times scale, row-major.
     matrix: [V3; 3],
     offset: V3,
 }
 
 impl Pose {
-    fn random(rng: &mut impl Rng) -> Self {
+    /// A random rotation, scale and offset, each axis stretched by up to `max_stretch`
+    /// either way (1: a similarity, which keeps angles and so labels).
+    pub(crate) fn random(rng: &mut impl Rng, max_stretch: f64) -> Self {
         // A uniformly random rotation from a Gaussian quaternion.
         let q: [f64; 4] = [(); 4].map(|()| rng.sample(rand_distr::StandardNormal));
         let rotation = bounded_geom::rotation_of_quaternion(q);
         let size = 10f64.powf(rng.random_range(-1.0..1.0));
-        let stretch: V3 = [(); 3].map(|()| size * 1.25f64.powf(rng.random_range(-1.0..1.0)));
+        let stretch: V3 = [(); 3].map(|()| size * max_stretch.powf(rng.random_range(-1.0..1.0)));
         let matrix = rotation.map(|row| [0, 1, 2].map(|c| row[c] * stretch[c]));
         let offset = [(); 3].map(|()| size * rng.random_range(-10.0..10.0));
         Self { matrix, offset }
     }
 
-    fn apply(&self, p: V3) -> V3 {
+    pub(crate) fn apply(&self, p: V3) -> V3 {
         [0, 1, 2].map(|r| vec3::dot(self.matrix[r], p) + self.offset[r])
+    }
+}
+
+impl SetKind {
+    /// Every kind.
+    pub const ALL: [SetKind; 5] = [
+        SetKind::Cad,
+        SetKind::Random,
+        SetKind::Boundary,
+        SetKind::Mixed,
+        SetKind::Freeform,
+    ];
+
+    /// The kind called `name` (see [`SetKind::name`]).
+    pub fn from_name(name: &str) -> Result<SetKind, DataError> {
+        let known = || SetKind::ALL.map(SetKind::name).join(", ");
+        (SetKind::ALL.into_iter().find(|k| k.name() == name)).ok_or_else(|| DataError::Generator {
+            what: format!("unknown set kind {name:?} ({})", known()),
+        })
+    }
+}
+
+impl SetConfig {
+    /// The set of `generated:KIND:SEED[:SHAPES]` (60 shapes by default), with the defaults of
+    /// [`SetConfig::new`].
+    pub fn from_spec(spec: &str) -> Result<SetConfig, DataError> {
+        let bad = |what: &str| DataError::Generator {
+            what: format!("{spec:?}: {what}"),
+        };
+        let fields: Vec<&str> = spec.split(':').collect();
+        let (kind, seed, shapes) = match fields[..] {
+            ["generated", kind, seed] => (kind, seed, "60"),
+            ["generated", kind, seed, shapes] => (kind, seed, shapes),
+            _ => return Err(bad("expected generated:KIND:SEED[:SHAPES]")),
+        };
+        let seed = seed.parse().map_err(|_| bad("bad seed"))?;
+        let shapes = (shapes.parse().ok().filter(|&n: &usize| n > 0))
+            .ok_or_else(|| bad("the shape count must be a whole number above 0"))?;
+        Ok(SetConfig::new(SetKind::from_name(kind)?, seed, shapes))
+    }
+
+    /// This set with noise `levels` (when given; else its own) along `direction`, checked.
+    pub fn with_noise(
+        mut self,
+        levels: Option<&[f64]>,
+        direction: NoiseDirection,
+    ) -> Result<SetConfig, DataError> {
+        if let Some(levels) = levels {
+            self.noise_levels = levels.to_vec();
+        }
+        self.noise_direction = direction;
+        self.validate()?;
+        Ok(self)
     }
 }
 

@@ -583,9 +583,10 @@ impl TableView<'_> {
         Ok(())
     }
 
-    /// Absolute position of point `i`: the exact input position if kept, else the cloud's,
-    /// on the LAS grid for scaled coordinates (so `x = scale * n + offset` prints as read).
-    pub(crate) fn position(&self, i: usize) -> [f64; 3] {
+    /// Absolute position of point `i`, as the writers store it: the exact input position if
+    /// kept, else the cloud's, on the LAS grid for scaled coordinates (so `x = scale * n +
+    /// offset` prints as read). For a table just read, the position exactly as in the file.
+    pub fn position(&self, i: usize) -> [f64; 3] {
         if let Some(exact) = self.exact_positions {
             return exact.get(i);
         }
@@ -627,8 +628,10 @@ pub(crate) fn drop_non_finite(properties: &mut [Property]) -> usize {
 }
 
 /// Builds a table from a file's properties: the cloud from its `x`, `y`, `z` columns (any
-/// type), the rest kept; the error names `path` and what is missing or invalid.
-pub(crate) fn from_properties(
+/// type), the rest kept; the error names `path` and what is missing or invalid. `f32`
+/// coordinates are kept as they are ([`PositionType::F32`]); others are re-centred, with
+/// the exact positions kept where the cloud's `f32` offsets lose digits, as readers do.
+pub fn from_properties(
     mut properties: Vec<Property>,
     path: &std::path::Path,
 ) -> Result<PointTable, crate::DataError> {

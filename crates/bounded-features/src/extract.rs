@@ -1,6 +1,6 @@
 //! Feature extraction over a whole cloud, streamed in Morton-ordered blocks.
 
-use bounded_geom::{Distinct, GeomError, KnnIndex, PointCloud};
+use bounded_geom::{Distinct, GeomError, KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
 use crate::context::{CONTEXT_PER_SCALE, contexts};
@@ -57,9 +57,9 @@ impl Features {
 /// Features of a run of points, as handed out by [`extract_chunks`].
 #[derive(Debug, Clone, Default)]
 pub struct FeatureBlock {
-    per_point: usize,
-    points: Vec<u32>,
-    values: Vec<f32>,
+    pub(crate) per_point: usize,
+    pub(crate) points: Vec<u32>,
+    pub(crate) values: Vec<f32>,
 }
 
 impl FeatureBlock {
@@ -194,31 +194,35 @@ fn chunks(
             probabilities: p.len(),
         });
     }
+    with_index(cloud, &mut f, |index, sink| {
+        extract_indexed(cloud, index, config, probabilities, chunk_points, sink)
+    })
+}
+
+/// Runs `run` over the search index of `cloud`'s distinct positions, with a sink that hands
+/// each block of distinct positions on to `f` with every repeat of them (see [`Distinct`]).
+pub(crate) fn with_index<R>(
+    cloud: &PointCloud,
+    f: &mut dyn FnMut(&FeatureBlock),
+    run: impl FnOnce(&KnnIndex, &mut dyn FnMut(&FeatureBlock)) -> Result<R, FeatureError>,
+) -> Result<R, FeatureError> {
     let Some(distinct) = Distinct::of(cloud) else {
-        let index = KnnIndex::new(cloud)?;
-        return extract_indexed(cloud, &index, config, probabilities, chunk_points, f);
+        return run(&KnnIndex::new(cloud)?, f);
     };
-    let mut shared = FeatureBlock::default();
     let index = KnnIndex::of_subset(cloud, distinct.firsts())?;
-    extract_indexed(
-        cloud,
-        &index,
-        config,
-        probabilities,
-        chunk_points,
-        |block| {
-            shared.per_point = block.per_point;
-            shared.points.clear();
-            shared.values.clear();
-            for (row, &first) in block.points.iter().enumerate() {
-                for &i in distinct.members(first) {
-                    shared.points.push(i);
-                    shared.values.extend_from_slice(block.row(row));
-                }
+    let mut shared = FeatureBlock::default();
+    run(&index, &mut |block| {
+        shared.per_point = block.per_point;
+        shared.points.clear();
+        shared.values.clear();
+        for (row, &first) in block.points.iter().enumerate() {
+            for &i in distinct.members(first) {
+                shared.points.push(i);
+                shared.values.extend_from_slice(block.row(row));
             }
-            f(&shared);
-        },
-    )
+        }
+        f(&shared);
+    })
     .map_err(|e| match e {
         FeatureError::Geom(GeomError::TooFewPoints { points, k }) => {
             FeatureError::TooFewDistinctPoints {
@@ -238,61 +242,86 @@ fn extract_indexed(
     config: &FeatureConfig,
     probabilities: Option<&[[f32; 3]]>,
     chunk_points: usize,
-    mut f: impl FnMut(&FeatureBlock),
+    f: &mut dyn FnMut(&FeatureBlock),
 ) -> Result<(), FeatureError> {
-    let k0 = config.largest_scale();
     let points = cloud.points();
-    let features = config.features_per_point();
     let mut block = FeatureBlock {
         per_point: values_per_point(config, probabilities.is_some()),
         ..FeatureBlock::default()
     };
     // With context, the features go to a buffer of their own first, then beside the context.
     let mut plain = Vec::new();
-    index.for_each_chunk(k0, chunk_points, |chunk| {
+    index.for_each_chunk(config.largest_scale(), chunk_points, |chunk| {
         block.points.clear();
         block.points.extend_from_slice(chunk.queries());
-        block.values.resize(chunk.len() * block.per_point, 0.0);
-        let out = match probabilities {
-            Some(_) => {
-                plain.resize(chunk.len() * features, 0.0);
-                &mut plain
+        match probabilities {
+            Some(probabilities) => {
+                plain_features(points, chunk, config, &mut plain);
+                in_context(
+                    points,
+                    chunk,
+                    config,
+                    &plain,
+                    probabilities,
+                    &mut block.values,
+                );
             }
-            None => &mut block.values,
-        };
-        out.par_chunks_mut(features * LANES)
-            .zip(chunk.rows().par_chunks(k0 * LANES))
-            .for_each_init(
-                || Scratch::new(k0),
-                |scratch, (out, rows)| group_features(points, rows, config, scratch, out),
-            );
-        if let Some(probabilities) = probabilities {
-            let per_scale = config.features_per_scale();
-            let stride = values_per_scale(config, true);
-            block
-                .values
-                .par_chunks_mut(block.per_point)
-                .zip(plain.par_chunks(features))
-                .zip(chunk.rows().par_chunks(k0))
-                .for_each(|((out, features), row)| {
-                    for (out, features) in
-                        (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale))
-                    {
-                        out[..per_scale].copy_from_slice(features);
-                    }
-                    contexts(
-                        points,
-                        row,
-                        &config.scales,
-                        probabilities,
-                        |scale, values| {
-                            let at = scale * stride + per_scale;
-                            out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
-                        },
-                    );
-                });
+            None => plain_features(points, chunk, config, &mut block.values),
         }
         f(&block);
     })?;
     Ok(())
+}
+
+/// The features of every row of `chunk` into `out` (resized), in parallel.
+pub(crate) fn plain_features(
+    points: &[[f32; 3]],
+    chunk: &NeighbourChunk,
+    config: &FeatureConfig,
+    out: &mut Vec<f32>,
+) {
+    let k0 = config.largest_scale();
+    let features = config.features_per_point();
+    out.resize(chunk.len() * features, 0.0);
+    out.par_chunks_mut(features * LANES)
+        .zip(chunk.rows().par_chunks(k0 * LANES))
+        .for_each_init(
+            || Scratch::new(k0),
+            |scratch, (out, rows)| group_features(points, rows, config, scratch, out),
+        );
+}
+
+/// The rows of `chunk` with their `plain` features (as [`plain_features`] gives them), each
+/// scale's beside its context of `probabilities`, into `out` (resized), in parallel.
+pub(crate) fn in_context(
+    points: &[[f32; 3]],
+    chunk: &NeighbourChunk,
+    config: &FeatureConfig,
+    plain: &[f32],
+    probabilities: &[[f32; 3]],
+    out: &mut Vec<f32>,
+) {
+    let per_scale = config.features_per_scale();
+    let stride = values_per_scale(config, true);
+    out.resize(chunk.len() * values_per_point(config, true), 0.0);
+    out.par_chunks_mut(config.scales.len() * stride)
+        .zip(plain.par_chunks(config.features_per_point()))
+        .zip(chunk.rows().par_chunks(chunk.k()))
+        .for_each(|((out, features), row)| {
+            for (out, features) in
+                (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale))
+            {
+                out[..per_scale].copy_from_slice(features);
+            }
+            contexts(
+                points,
+                row,
+                &config.scales,
+                probabilities,
+                |scale, values| {
+                    let at = scale * stride + per_scale;
+                    out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
+                },
+            );
+        });
 }

@@ -31,8 +31,7 @@
 //! tests allow it for at most 1% of points, at a tolerance of 1e-3).
 //!
 //! ```
-//! use bounded_features::{FeatureConfig, FeatureGroups, extract};
-//! use bounded_geom::PointCloud;
+//! use bounded_features::{FeatureConfig, FeatureGroups, PointCloud, extract};
 //!
 //! // A 12 x 12 grid on the plane z = 0, with absolute coordinates.
 //! let positions: Vec<[f64; 3]> = (0..144)
@@ -54,7 +53,10 @@ mod context;
 mod error;
 mod extract;
 mod local;
+mod staged;
 
+/// The point cloud type the features take, re-exported so that this crate alone is enough.
+pub use bounded_geom::{GeomError, PointCloud};
 pub use config::{DEFAULT_SCALES, FeatureConfig, FeatureGroups};
 pub use context::{CONTEXT_NAMES, CONTEXT_PER_SCALE};
 pub use error::FeatureError;
@@ -62,3 +64,4 @@ pub use extract::{
     DEFAULT_CHUNK_POINTS, FeatureBlock, Features, extract, extract_chunks,
     extract_chunks_in_context, extract_in_context, values_per_point, values_per_scale,
 };
+pub use staged::{PENDING_CHUNKS, extract_chunks_staged};

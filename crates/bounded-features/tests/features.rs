@@ -5,7 +5,7 @@
 
 use bounded_features::{
     CONTEXT_PER_SCALE, FeatureConfig, FeatureError, FeatureGroups, Features, extract,
-    extract_chunks, extract_in_context,
+    extract_chunks, extract_chunks_staged, extract_in_context,
 };
 use bounded_geom::{GeomError, PointCloud};
 
@@ -465,4 +465,74 @@ fn clear_errors() {
         extract(&small, &config(&[2, 3])),
         Err(FeatureError::InvalidScales { .. })
     ));
+}
+
+/// A stand-in first stage: probabilities from a row's first values, so that they vary from
+/// point to point the way a classifier's would.
+fn stand_in_first_stage(row: &[f32]) -> [f32; 3] {
+    let (a, b) = (row[0].abs(), row[S_PERP].abs());
+    let sum = 1.0 + a + b;
+    [1.0 / sum, a / sum, b / sum]
+}
+
+#[test]
+fn staged_equals_two_passes_whatever_the_chunking_and_thread_count() {
+    // A crease with repeated points (each repeat's block row stands for its position).
+    let mut pts = surface(30, 0.02, 11, |x, y| -x.abs() + 0.1 * (0.5 * y).sin());
+    pts.extend(pts.clone().iter().step_by(5));
+    let cloud = PointCloud::from_f64(&pts).unwrap();
+    let cfg = config(&[32, 8]);
+    let plain = extract(&cloud, &cfg).unwrap();
+    let first: Vec<[f32; 3]> = (0..plain.len())
+        .map(|i| stand_in_first_stage(plain.point(i)))
+        .collect();
+    let reference = extract_in_context(&cloud, &cfg, &first).unwrap();
+    let per_point = reference.per_point();
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        // Chunks of 1 and 7 points wait for many later chunks: their halos get computed.
+        for chunk in [1, 7, 60, 333, 100_000] {
+            let mut got = vec![f32::NAN; reference.as_slice().len()];
+            let mut seen = vec![0; pts.len()];
+            let halo = pool
+                .install(|| {
+                    extract_chunks_staged(
+                        &cloud,
+                        &cfg,
+                        chunk,
+                        |block, out| {
+                            for (r, p) in out.iter_mut().enumerate() {
+                                *p = stand_in_first_stage(block.row(r));
+                            }
+                        },
+                        |block| {
+                            for (r, &i) in block.points().iter().enumerate() {
+                                let i = i as usize;
+                                got[i * per_point..(i + 1) * per_point]
+                                    .copy_from_slice(block.row(r));
+                                seen[i] += 1;
+                            }
+                        },
+                    )
+                })
+                .unwrap();
+            assert!(seen.iter().all(|&s| s == 1), "chunk {chunk}");
+            assert!(
+                got.iter()
+                    .zip(reference.as_slice())
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "threads {threads}, chunk {chunk}"
+            );
+            // Small chunks overflow the window of waiting chunks; one chunk never waits.
+            if chunk <= 7 {
+                assert!(halo > 0, "chunk {chunk}: no halo");
+            }
+            if chunk == 100_000 {
+                assert_eq!(halo, 0);
+            }
+        }
+    }
 }

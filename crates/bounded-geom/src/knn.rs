@@ -1,5 +1,7 @@
 //! All-points exact k-nearest-neighbour search, traversed in Morton-ordered chunks.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use crate::grid::{Grid, Scratch, Sorted};
@@ -170,41 +172,28 @@ impl KnnIndex {
         chunk_points: usize,
         mut f: impl FnMut(&NeighbourChunk),
     ) -> Result<(), GeomError> {
+        let search = self.search(k)?;
+        let mut chunk = NeighbourChunk::default();
+        let step = chunk_points.max(1);
+        for start in (0..self.len()).step_by(step) {
+            search.positions(start..(start + step).min(self.len()), &mut chunk);
+            f(&chunk);
+        }
+        Ok(())
+    }
+
+    /// A search for the `k` nearest neighbours of any indexed points, its grid built once:
+    /// for callers that visit the points in an order of their own (a second pass over some
+    /// of them, say). Fails like [`for_each_chunk`](Self::for_each_chunk) for a bad `k`.
+    pub fn search(&self, k: usize) -> Result<KnnSearch<'_>, GeomError> {
         self.check_k(k)?;
         let sorted = self.sorted();
         let grid = Grid::new(&sorted, k);
-        let mut chunk = NeighbourChunk {
+        Ok(KnnSearch {
+            index: self,
+            grid,
             k,
-            ..NeighbourChunk::default()
-        };
-        let mut start = 0;
-        while start < self.len() {
-            let end = (start + chunk_points.max(1)).min(self.len());
-            chunk.queries.clear();
-            chunk.queries.extend_from_slice(&self.order[start..end]);
-            chunk.neighbours.resize((end - start) * k, 0);
-            // Split the chunk into runs within one cell, each with its own rows.
-            let mut jobs = Vec::new();
-            let mut rest = chunk.neighbours.as_mut_slice();
-            let mut pos = start;
-            while pos < end {
-                let cell = grid.cell_of(pos);
-                let stop = grid.range(cell).end.min(end);
-                let (rows, tail) = rest.split_at_mut((stop - pos) * k);
-                jobs.push((cell, pos..stop, rows));
-                rest = tail;
-                pos = stop;
-            }
-            jobs.into_par_iter().for_each_init(
-                Scratch::default,
-                |scratch, (cell, queries, rows)| {
-                    grid.search_cell(&sorted, cell, queries, rows, scratch)
-                },
-            );
-            f(&chunk);
-            start = end;
-        }
-        Ok(())
+        })
     }
 
     fn check_k(&self, k: usize) -> Result<(), GeomError> {
@@ -215,6 +204,61 @@ impl KnnIndex {
             });
         }
         Ok(())
+    }
+}
+
+/// The `k`-nearest-neighbour search of a [`KnnIndex`] for one `k` (see [`KnnIndex::search`]).
+///
+/// Points are named by their position in the index's Morton order
+/// ([`KnnIndex::order`]); rows are the same whichever run of positions asks for them.
+pub struct KnnSearch<'a> {
+    index: &'a KnnIndex,
+    grid: Grid,
+    k: usize,
+}
+
+impl KnnSearch<'_> {
+    /// Neighbours per row.
+    pub fn k(&self) -> usize {
+        self.k
+    }
+
+    /// The neighbour lists of the points at Morton positions `positions` (ascending, each
+    /// below [`KnnIndex::len`]) into `chunk`, searched in parallel: runs of consecutive
+    /// positions within one grid cell share one candidate set.
+    pub fn positions(
+        &self,
+        positions: impl IntoIterator<Item = usize>,
+        chunk: &mut NeighbourChunk,
+    ) {
+        let index = self.index;
+        let k = self.k;
+        chunk.k = k;
+        chunk.queries.clear();
+        // Runs of consecutive positions within one cell.
+        let mut runs: Vec<(usize, Range<usize>)> = Vec::new();
+        for pos in positions {
+            chunk.queries.push(index.order[pos]);
+            match runs.last_mut() {
+                Some((cell, run)) if run.end == pos && self.grid.range(*cell).contains(&pos) => {
+                    run.end = pos + 1;
+                }
+                _ => runs.push((self.grid.cell_of(pos), pos..pos + 1)),
+            }
+        }
+        chunk.neighbours.resize(chunk.queries.len() * k, 0);
+        let mut jobs = Vec::with_capacity(runs.len());
+        let mut rest = chunk.neighbours.as_mut_slice();
+        for (cell, run) in runs {
+            let (rows, tail) = rest.split_at_mut(run.len() * k);
+            jobs.push((cell, run, rows));
+            rest = tail;
+        }
+        let sorted = index.sorted();
+        jobs.into_par_iter()
+            .for_each_init(Scratch::default, |scratch, (cell, queries, rows)| {
+                self.grid.search_cell(&sorted, cell, queries, rows, scratch)
+            });
     }
 }
 

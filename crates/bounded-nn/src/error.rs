@@ -37,6 +37,31 @@ pub enum NnError {
     /// Reading or writing a model file failed.
     #[error("model file I/O: {0}")]
     Io(#[from] std::io::Error),
+    /// Feature extraction failed (bad scales, too few distinct positions).
+    #[error(transparent)]
+    Features(#[from] bounded_features::FeatureError),
+    /// Work on one of several clouds failed (its features, its detection).
+    #[error("{name}: {source}")]
+    Cloud {
+        /// The cloud's name.
+        name: String,
+        /// What failed.
+        source: Box<NnError>,
+    },
+    /// A cloud smaller than the largest neighbourhood.
+    #[error(
+        "the cloud has {points} points, fewer than the largest scale ({scale} neighbours); \
+         choose smaller scales or use a denser cloud"
+    )]
+    TooFewPoints {
+        /// Points in the cloud.
+        points: usize,
+        /// The largest scale.
+        scale: usize,
+    },
+    /// The networks gave a probability that is not a finite number (a broken model file).
+    #[error("the model gave non-finite probabilities; the model file is unusable")]
+    NonFinite,
     /// Burn reported an error while reading tensor data back.
     #[error("tensor read-back failed: {0}")]
     Tensor(String),

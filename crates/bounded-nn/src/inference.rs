@@ -122,8 +122,9 @@ impl Classifier {
     /// Softmax class probabilities for every point of `features` (row-major
     /// `[point][scale][feature]`, [`n_inputs`](Self::n_inputs) per point) into `out`, one entry
     /// per point.
-    /// For a two-stage model these are the first network's: the second one's inputs need
-    /// them over every point's neighbourhood first.
+    /// This is one network: for a two-stage model, the first network's probabilities, which
+    /// are not the model's answer (the second network's inputs need them over every point's
+    /// neighbourhood first). [`Detector`](crate::Detector) runs every stage.
     pub fn predict(&self, features: &[f32], out: &mut [[f32; N_CLASSES]]) -> Result<(), NnError> {
         let n = self.n_inputs();
         if features.len() != out.len() * n {

@@ -4,19 +4,26 @@
 //! feature group; every table selects its columns from them (the nested kNN sets make a
 //! smaller configuration's features exactly a subset), so the ablations cost only training.
 
-use super::eval::{self, MethodResults, ModelResult};
-use super::train::{self, FeatureSet, Schedule, Seconds, Widths};
-use super::{rate, sources};
+use super::{load_set, peer_methods, rate, training_clouds};
 use crate::cli::BenchArgs;
-use crate::peers;
-use crate::plot::{self, PALETTE, Series};
+use crate::progress::FitBars;
 use crate::{atomic, pipeline};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
+use bounded_data::peers;
+use bounded_data::picture::{Canvas, PALETTE, Series, precision_recall};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
-use bounded_features::{FeatureConfig, FeatureGroups, extract_in_context};
+use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::{Class, PointCloud};
-use bounded_nn::{BinaryConfusion, Classifier, ConfusionMatrix, ModelFile, N_CLASSES};
+use bounded_nn::baseline::CaBaseline;
+use bounded_nn::calibration::{Calibration, SENSITIVITIES};
+use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths, columns};
+use bounded_nn::report::{
+    self, MethodResults, ModelResult, confusion_table, medians_table, per_model_table, pooled,
+};
+use bounded_nn::{
+    BinaryConfusion, Classifier, ConfusionMatrix, Detector, ModelFile, TrainingCloud,
+};
 use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -51,6 +58,14 @@ pub const TRAINING_NOISE_ALONG: NoiseDirection = NoiseDirection::Normal;
 /// The generated boundary evaluation set: its own seed, never used for training.
 const BOUNDARY_EVAL: (u64, usize) = (1001, 30);
 
+/// Training-side validation clouds for calibration and the sensitivity: the training kinds
+/// with seeds of their own, never trained on and never evaluated on.
+const VALIDATION_SETS: [&str; 3] = [
+    "generated:cad:2001:10",
+    "generated:random:2002:10",
+    "generated:boundary:2003:10",
+];
+
 /// The generated CAD sets of the noise sweep: their own seed, never used for training.
 const NOISE_EVAL: (u64, usize) = (1002, 30);
 
@@ -69,8 +84,19 @@ struct Featured {
     name: String,
     /// The cloud, for a second stage's context features.
     cloud: PointCloud,
-    truth: Vec<u8>,
+    labels: Vec<Class>,
     features: FeatureSet,
+}
+
+impl Featured {
+    /// The labelled cloud, for the library's evaluation.
+    fn labelled(&self) -> TrainingCloud<'_> {
+        TrainingCloud {
+            name: &self.name,
+            cloud: &self.cloud,
+            labels: &self.labels,
+        }
+    }
 }
 
 /// One evaluation set.
@@ -115,7 +141,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let shrink = if args.quick { 4 } else { 1 };
     let mut training = Vec::new();
     for source in TRAINING_SETS {
-        let mut config = sources::generated_config(source)?;
+        let mut config = SetConfig::from_spec(source)?;
         config.noise_levels = TRAINING_NOISE.to_vec();
         config.noise_direction = TRAINING_NOISE_ALONG;
         config.shapes /= shrink;
@@ -142,14 +168,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
 
     // Timing of the default configuration, as the paper's timing table.
-    let (main_file, train_seconds) = train::fit_stages(
-        &training,
+    let mut bars = FitBars::new();
+    let (main_file, train_seconds) = fit::fit_stages(
+        &training_clouds(&training),
         &main,
         &schedule,
         &Widths::default(),
         true,
         "bounded bench".into(),
+        &mut |step| bars.show(step),
     )?;
+    bars.finish();
     if !args.quick {
         let _ = writeln!(
             report,
@@ -164,9 +193,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     // The ablations are single-stage: the main model's first stage is their reference.
     let first_stage = Classifier::from_file(main_file.first_stage())?;
-    let classifier = Classifier::from_file(main_file)?;
+    let detector = Detector::new(Classifier::from_file(main_file)?)?;
+    let ours_scorer = Scorer::Detector(&detector);
 
-    let train_full = train::feature_set(&training, &full, None, "features16")?;
+    let train_full = features(&training, &full)?;
     drop(training);
     let sets = [
         load_eval(&pcednet.join("default"), "default", &full)?,
@@ -176,19 +206,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     ];
 
     // 1-2: main tables with peers, and our CA.
-    let ca = CaBaseline::fit(&train_full, &full, &main);
+    let ca = CaBaseline::fit(&train_full, &full, &main.scales)?;
     for set in &sets[..2] {
-        let ours = score(&classifier, &full, &main, set)?;
-        let mut methods = vec![eval::as_method("BoundED-rs (ours)", &ours, Class::Sharp)];
-        methods.push(ca.evaluate(set));
+        let ours = score(&ours_scorer, &full, set)?;
+        let mut methods = vec![MethodResults::of("BoundED-rs (ours)", &ours, Class::Sharp)];
+        methods.push(ca_results(&ca, set));
         let models: Vec<String> = set.clouds.iter().map(|c| c.name.clone()).collect();
-        methods.extend(eval::peer_methods(&peers, set.key, &models));
+        methods.extend(peer_methods(&peers, set.key, &models));
         let _ = writeln!(
             report,
             "## {} evaluation set ({} models): medians, sharp edge positive\n\n{}",
             set.key,
             set.clouds.len(),
-            eval::medians_table(&methods)
+            medians_table(&methods)
         );
         let _ = writeln!(
             report,
@@ -196,8 +226,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
              The paper reports BoundED MCC 0.423 (Default, trained on Default) and 0.842 \
              (ABC, trained on ABC, all 7168 models).\n\n{}\n",
             peers_path.display(),
-            ca.describe(),
-            eval::per_model_table(&methods[0])
+            format_args!(
+                "CA-rs: surface variation at k = {} above {:.3} (fitted on the training set)",
+                ca.scale, ca.threshold
+            ),
+            per_model_table(&methods[0])
         );
         let png = args.output.join(format!("pr_{}.png", set.key));
         pr_plot(&format!("{}: precision vs recall", set.key), &methods).save_png(&png)?;
@@ -205,12 +238,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
 
     // 3: timing.
-    report.push_str(&timing_table(
-        &classifier,
-        &main,
-        &args.data,
-        &train_seconds,
-    )?);
+    report.push_str(&timing_table(&detector, &args.data, &train_seconds)?);
 
     // 4: ablations; the configuration of the main model reuses it instead of retraining.
     let ablation = |label: &str, target: &FeatureConfig, widths: &Widths| -> Result<String> {
@@ -221,7 +249,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             ablated = trained(&train_full, &full, target, &ablation_schedule, widths)?;
             &ablated
         };
-        ablation_row(label, model, &full, target, &sets)
+        let scorer = Scorer::Columns { model, target };
+        ablation_row(label, &scorer, &full, &sets)
     };
     report.push_str("## Feature ablation (4 scales)\n\n| features | Default MCC | Default F1 | ABC MCC | ABC F1 | noisy ABC MCC |\n|---|---|---|---|---|---|\n");
     for (label, groups) in feature_ablations() {
@@ -250,20 +279,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
         report.push_str(&ablation(&label, &main, &widths)?);
     }
-    let second = classifier.file().second_stage.as_deref();
+    let main_file = detector.classifier().file();
+    let second = main_file.second_stage.as_deref();
     let label = format!(
         "{:?} / {:?} and an auto-context second stage ({} parameters; the main model)",
         Widths::default().fusion,
         Widths::default().hidden,
-        classifier.file().model.n_params() + second.map_or(0, |f| f.model.n_params())
+        main_file.model.n_params() + second.map_or(0, |f| f.model.n_params())
     );
-    report.push_str(&ablation_row(&label, &classifier, &full, &main, &sets)?);
+    report.push_str(&ablation_row(&label, &ours_scorer, &full, &sets)?);
 
     // 5: noise and boundaries.
-    let clean = score(&classifier, &full, &main, &sets[1])?;
-    let noisy = score(&classifier, &full, &main, &sets[2])?;
+    let clean = score(&ours_scorer, &full, &sets[1])?;
+    let noisy = score(&ours_scorer, &full, &sets[2])?;
     let mcc = |r: &[ModelResult]| {
-        eval::as_method("", r, Class::Sharp)
+        MethodResults::of("", r, Class::Sharp)
             .median()
             .map_or(f64::NAN, |s| s.mcc)
     };
@@ -285,7 +315,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     for (level, direction) in NOISE_SWEEP {
         let set = noise_eval(&full, level, direction)?;
         let (sweep_mcc, sweep_f1) =
-            eval::as_method("", &score(&classifier, &full, &main, &set)?, Class::Sharp)
+            MethodResults::of("", &score(&ours_scorer, &full, &set)?, Class::Sharp)
                 .median()
                 .map_or((f64::NAN, f64::NAN), |s| (s.mcc, s.f1));
         let _ = writeln!(
@@ -295,8 +325,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     report.push('\n');
-    let boundary = score(&classifier, &full, &main, &sets[3])?;
-    let b = eval::as_method("BoundED-rs (ours)", &boundary, Class::Boundary);
+    let boundary = score(&ours_scorer, &full, &sets[3])?;
+    let b = MethodResults::of("BoundED-rs (ours)", &boundary, Class::Boundary);
     let _ = writeln!(
         report,
         "## Boundaries (generated set, seed {}, {} clouds, never trained on)\n\n\
@@ -304,10 +334,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
          3-class confusion, all clouds:\n\n{}",
         BOUNDARY_EVAL.0,
         BOUNDARY_EVAL.1,
-        eval::medians_table(&[b]),
-        eval::pooled(&boundary).binary(Class::Boundary as u8).f1(),
-        eval::confusion_table(&boundary)
+        medians_table(&[b]),
+        pooled(&boundary).binary(Class::Boundary as u8).f1(),
+        confusion_table(&boundary)
     );
+    report.push_str(&calibration_section(&detector, &sets)?);
     let _ = writeln!(
         report,
         "\nBench wall time: {:.1} min.",
@@ -318,6 +349,51 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     println!("{report}");
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// Calibration on generated validation clouds (training-side: the training kinds and noise,
+/// other seeds), the sensitivity that maximises their median MCC, and MCC against the
+/// sensitivity on every evaluation set, for a user to choose a trade-off.
+fn calibration_section(detector: &Detector, sets: &[EvalSet]) -> Result<String> {
+    let mut validation = Vec::new();
+    for source in VALIDATION_SETS {
+        let mut config = SetConfig::from_spec(source)?;
+        config.noise_levels = TRAINING_NOISE.to_vec();
+        config.noise_direction = TRAINING_NOISE_ALONG;
+        validation.extend(synth::generate(&config)?);
+    }
+    let on_validation = Calibration::measure(detector, &training_clouds(&validation))?;
+    let mut out = format!(
+        "## Calibration and sensitivity
+
+Validation clouds ({}, training noise): expected \
+         calibration error of p_sharp {:.4}, of p_boundary {:.4}; the highest median sharp MCC \
+         at sensitivity {} (`--sensitivity`; without it, the most probable class).\n\n\
+         p_sharp reliability on them:\n\n{}\nMedian sharp MCC against `--sensitivity`:\n\n\
+         | set |",
+        VALIDATION_SETS.join(", "),
+        on_validation.sharp.expected_calibration_error(),
+        on_validation.boundary.expected_calibration_error(),
+        on_validation.best_sensitivity(),
+        on_validation.sharp.table()
+    );
+    for s in SENSITIVITIES {
+        let _ = write!(out, " {s} |");
+    }
+    out.push_str(&format!("\n|---|{}\n", "---|".repeat(SENSITIVITIES.len())));
+    let mut row = |name: &str, c: &Calibration| {
+        let _ = write!(out, "| {name} |");
+        for mcc in c.median_mcc() {
+            let _ = write!(out, " {mcc:.3} |");
+        }
+        out.push('\n');
+    };
+    row("validation", &on_validation);
+    for set in sets {
+        let clouds: Vec<_> = set.clouds.iter().map(Featured::labelled).collect();
+        row(set.key, &Calibration::measure(detector, &clouds)?);
+    }
+    Ok(out)
 }
 
 fn all_groups() -> FeatureGroups {
@@ -391,42 +467,6 @@ fn feature_ablations() -> Vec<(&'static str, FeatureGroups)> {
     ]
 }
 
-/// Column indices of `target`'s values within rows computed with `full`.
-fn columns(full: &FeatureConfig, target: &FeatureConfig) -> Result<Vec<usize>> {
-    let full_names = full.groups.names();
-    let per_scale = full_names.len();
-    let mut columns = Vec::new();
-    for scale in &target.scales {
-        let s = full
-            .scales
-            .iter()
-            .position(|k| k == scale)
-            .with_context(|| format!("scale {scale} is not among {:?}", full.scales))?;
-        for name in target.groups.names() {
-            let v = full_names
-                .iter()
-                .position(|n| *n == name)
-                .with_context(|| format!("feature {name} not computed"))?;
-            columns.push(s * per_scale + v);
-        }
-    }
-    Ok(columns)
-}
-
-/// The rows of `set` restricted to `columns`.
-fn select(set: &FeatureSet, columns: &[usize]) -> FeatureSet {
-    let mut features = Vec::with_capacity(set.len() * columns.len());
-    for row in set.features.chunks_exact(set.per_point) {
-        features.extend(columns.iter().map(|&c| row[c]));
-    }
-    FeatureSet {
-        features,
-        labels: set.labels.clone(),
-        per_point: columns.len(),
-        in_context: set.in_context,
-    }
-}
-
 fn trained(
     set: &FeatureSet,
     full: &FeatureConfig,
@@ -434,29 +474,39 @@ fn trained(
     schedule: &Schedule,
     widths: &Widths,
 ) -> Result<Classifier> {
-    let selected = select(set, &columns(full, target)?);
-    let file = train::fit(
+    let selected = set.select(&columns(full, target)?);
+    let mut bars = FitBars::new();
+    let file = fit::fit(
         &selected,
         target,
         schedule,
         widths,
         "bounded bench (ablation)".into(),
+        &mut |step| bars.show(step),
     )?;
+    bars.finish();
     Ok(Classifier::from_file(file)?)
+}
+
+/// The features of `clouds` at the full configuration, with a progress bar.
+fn features(clouds: &[(String, LabelledCloud)], full: &FeatureConfig) -> Result<FeatureSet> {
+    let mut bars = FitBars::new();
+    let set = fit::feature_set(&training_clouds(clouds), full, None, &mut |s| bars.show(s))?;
+    bars.finish();
+    Ok(set)
 }
 
 fn featured(clouds: Vec<(String, LabelledCloud)>, full: &FeatureConfig) -> Result<Vec<Featured>> {
     clouds
         .into_iter()
         .map(|(name, labelled)| {
-            let truth = Class::codes(&labelled.labels);
             let one = [(name, labelled)];
-            let features = train::feature_set(&one, full, None, "features16")?;
+            let features = features(&one, full)?;
             let [(name, labelled)] = one;
             Ok(Featured {
                 name,
                 cloud: labelled.cloud,
-                truth,
+                labels: labelled.labels,
                 features,
             })
         })
@@ -467,7 +517,7 @@ fn load_eval(dir: &Path, key: &'static str, full: &FeatureConfig) -> Result<Eval
     if !dir.is_dir() {
         bail!("{}: evaluation set missing (see --data)", dir.display());
     }
-    let clouds = featured(eval::load_set(dir, Class::NonEdge)?, full)?;
+    let clouds = featured(load_set(dir, Class::NonEdge)?, full)?;
     Ok(EvalSet { key, clouds })
 }
 
@@ -499,31 +549,31 @@ fn noise_eval(full: &FeatureConfig, level: f64, direction: NoiseDirection) -> Re
     })
 }
 
-/// Classifies every cloud of `set` with `model` (features `target`, selected from `full`; a
-/// second stage's context features computed anew).
-fn score(
-    model: &Classifier,
-    full: &FeatureConfig,
-    target: &FeatureConfig,
-    set: &EvalSet,
-) -> Result<Vec<ModelResult>> {
-    let columns = columns(full, target)?;
-    set.clouds
-        .iter()
+/// What the bench scores: the main model through the library detector, or a one-stage
+/// ablation model over its columns of the precomputed features.
+enum Scorer<'a> {
+    Detector(&'a Detector),
+    Columns {
+        model: &'a Classifier,
+        target: &'a FeatureConfig,
+    },
+}
+
+/// Classifies every cloud of `set` with `scorer` (its features computed with `full`).
+fn score(scorer: &Scorer<'_>, full: &FeatureConfig, set: &EvalSet) -> Result<Vec<ModelResult>> {
+    let (model, target) = match scorer {
+        Scorer::Detector(detector) => {
+            let clouds: Vec<_> = set.clouds.iter().map(Featured::labelled).collect();
+            return Ok(report::evaluate(detector, &clouds, &mut |_, _| {})?);
+        }
+        Scorer::Columns { model, target } => (model, target),
+    };
+    (set.clouds.iter())
         .map(|c| {
-            let rows = select(&c.features, &columns).features;
-            let predicted = match model.second_stage() {
-                None => model.classify(&rows)?,
-                Some(second) => {
-                    let mut first = vec![[0f32; N_CLASSES]; c.cloud.len()];
-                    model.predict(&rows, &mut first)?;
-                    let context = extract_in_context(&c.cloud, target, &first)?;
-                    second.classify(context.as_slice())?
-                }
-            };
+            let predicted = model.classify(&c.features.select(&columns(full, target)?).features)?;
             Ok(ModelResult {
                 name: c.name.clone(),
-                matrix: ConfusionMatrix::from_labels(&c.truth, &predicted)?,
+                matrix: ConfusionMatrix::from_labels(&Class::codes(&c.labels), &predicted)?,
             })
         })
         .collect()
@@ -531,16 +581,15 @@ fn score(
 
 fn ablation_row(
     label: &str,
-    model: &Classifier,
+    scorer: &Scorer<'_>,
     full: &FeatureConfig,
-    target: &FeatureConfig,
     sets: &[EvalSet],
 ) -> Result<String> {
     let mut row = format!("| {label} |");
     // Default and ABC: MCC and F1; noisy ABC: MCC, to show what each ablation does to the
     // noise gap.
     for (k, set) in sets[..3].iter().enumerate() {
-        let m = eval::as_method("", &score(model, full, target, set)?, Class::Sharp);
+        let m = MethodResults::of("", &score(scorer, full, set)?, Class::Sharp);
         let s = m.median().context("empty evaluation set")?;
         let _ = write!(row, " {:.3} |", s.mcc);
         if k < 2 {
@@ -553,12 +602,7 @@ fn ablation_row(
 
 /// Timing of the default configuration: training preprocessing and training, then features
 /// and classification on each PCEDNet evaluation set (through the streaming detector).
-fn timing_table(
-    classifier: &Classifier,
-    main: &FeatureConfig,
-    data: &Path,
-    train: &Seconds,
-) -> Result<String> {
+fn timing_table(detector: &Detector, data: &Path, train: &Seconds) -> Result<String> {
     let mut out = format!(
         "## Timing (2 cores, CPU only)\n\nTraining (both stages): features {:.1} s, \
          training {:.1} s.\n\n| set | points | features + kNN s | classification s | points/s |\n\
@@ -566,11 +610,11 @@ fn timing_table(
         train.features, train.training
     );
     for key in ["default", "abc"] {
-        let clouds = eval::load_set(&data.join("pcednet").join(key), Class::NonEdge)?;
+        let clouds = load_set(&data.join("pcednet").join(key), Class::NonEdge)?;
         let (mut points, mut total, mut classification) = (0, 0.0, 0.0);
         for (name, labelled) in &clouds {
-            let d = pipeline::detect(&labelled.cloud, classifier, main, false)
-                .with_context(|| name.clone())?;
+            let d =
+                pipeline::detect(detector, &labelled.cloud, false).with_context(|| name.clone())?;
             points += labelled.cloud.len();
             total += d.elapsed.as_secs_f64();
             classification += d.classification.as_secs_f64();
@@ -587,7 +631,7 @@ fn timing_table(
 }
 
 /// A precision-recall scatter plot of the methods.
-fn pr_plot(title: &str, methods: &[MethodResults]) -> crate::canvas::Canvas {
+fn pr_plot(title: &str, methods: &[MethodResults]) -> Canvas {
     let series: Vec<Series> = methods
         .iter()
         .enumerate()
@@ -601,93 +645,25 @@ fn pr_plot(title: &str, methods: &[MethodResults]) -> crate::canvas::Canvas {
                 .collect(),
         })
         .collect();
-    plot::precision_recall(title, &series)
+    precision_recall(title, &series)
 }
 
-/// Our covariance-analysis baseline: a point is a sharp edge when its surface variation
-/// `lambda_min / (lambda_1 + lambda_2 + lambda_3)` at one scale exceeds a threshold; scale and
-/// threshold are the ones with the best MCC on the training set.
-struct CaBaseline {
-    column: [usize; 3],
-    scale: usize,
-    threshold: f32,
-}
-
-impl CaBaseline {
-    fn fit(train: &FeatureSet, full: &FeatureConfig, main: &FeatureConfig) -> Self {
-        let mut best = (
-            f64::MIN,
-            Self {
-                column: [0, 1, 2],
-                scale: full.scales[0],
-                threshold: 0.0,
-            },
-        );
-        let sigma_of = |scale: usize| {
-            let s = full.scales.iter().position(|&k| k == scale).unwrap_or(0);
-            let base = s * full.groups.count();
-            [base, base + 1, base + 2]
-        };
-        let truth: Vec<u8> = train.labels.iter().map(|&l| u8::from(l == 1)).collect();
-        for &scale in &main.scales {
-            let column = sigma_of(scale);
-            for step in 1..100 {
-                let candidate = Self {
-                    column,
-                    scale,
-                    threshold: step as f32 / 300.0,
-                };
-                let predicted = candidate.predict(train);
-                let mcc = BinaryConfusion::from_labels(&truth, &predicted, 1)
-                    .map_or(f64::MIN, |c| c.mcc());
-                if mcc > best.0 {
-                    best = (mcc, candidate);
-                }
-            }
-        }
-        best.1
-    }
-
-    fn variation(&self, row: &[f32]) -> f32 {
-        let l = self.column.map(|c| row[c]);
-        let sum = l[0] + l[1] + l[2];
-        if sum > 0.0 {
-            l[0].min(l[1]).min(l[2]) / sum
-        } else {
-            0.0
-        }
-    }
-
-    fn predict(&self, set: &FeatureSet) -> Vec<u8> {
-        set.features
-            .chunks_exact(set.per_point)
-            .map(|row| u8::from(self.variation(row) > self.threshold))
-            .collect()
-    }
-
-    fn evaluate(&self, set: &EvalSet) -> MethodResults {
-        MethodResults {
-            name: "CA-rs (surface variation, ours)".into(),
-            positive: "sharp".into(),
-            models: set
-                .clouds
-                .iter()
-                .map(|c| {
-                    let truth: Vec<u8> = c.truth.iter().map(|&l| u8::from(l == 1)).collect();
-                    let predicted = self.predict(&c.features);
-                    let confusion =
-                        BinaryConfusion::from_labels(&truth, &predicted, 1).unwrap_or_default();
-                    (c.name.clone(), confusion)
-                })
-                .collect(),
-        }
-    }
-
-    fn describe(&self) -> String {
-        format!(
-            "CA-rs: surface variation at k = {} above {:.3} (fitted on the training set)",
-            self.scale, self.threshold
-        )
+/// The CA baseline's results on `set` (its features computed with the fit's configuration).
+fn ca_results(ca: &CaBaseline, set: &EvalSet) -> MethodResults {
+    MethodResults {
+        name: "CA-rs (surface variation, ours)".into(),
+        positive: "sharp".into(),
+        models: (set.clouds.iter())
+            .map(|c| {
+                let truth: Vec<u8> = (c.labels.iter())
+                    .map(|&l| u8::from(l == Class::Sharp))
+                    .collect();
+                let predicted = ca.predict(&c.features);
+                let confusion =
+                    BinaryConfusion::from_labels(&truth, &predicted, 1).unwrap_or_default();
+                (c.name.clone(), confusion)
+            })
+            .collect(),
     }
 }
 

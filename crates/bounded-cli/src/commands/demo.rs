@@ -1,13 +1,13 @@
 //! `bounded demo`: no files needed. A generated scene with creases, smooth parts and
 //! boundaries is labelled by the embedded model and scored against its exact labels.
 
-use super::{rate, render, sources};
+use super::rate;
 use crate::cli::DemoArgs;
 use crate::pipeline;
-use crate::render::View;
 use anyhow::{Context, Result};
 use bounded_data::LabelledCloud;
 use bounded_data::format;
+use bounded_data::picture::{View, render_classes};
 use bounded_data::synth::{NoiseDirection, Sampling, ShapeKind, ShapeSpec, generate_shape};
 use bounded_data::table::{Column, PointTable, Property};
 use bounded_geom::{Class, PointCloud};
@@ -66,9 +66,7 @@ pub fn scene(seed: u64) -> Result<LabelledCloud> {
 
 pub fn run(args: &DemoArgs) -> Result<()> {
     let scene = scene(args.seed)?;
-    let classifier = sources::model(None)?;
-    let config = pipeline::feature_config(&classifier, None)?;
-    let detection = pipeline::detect(&scene.cloud, &classifier, &config, true)?;
+    let detection = pipeline::detect(&pipeline::detector(Default::default())?, &scene.cloud, true)?;
 
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
@@ -81,7 +79,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         azimuth: 20.0,
         elevation: 35.0,
     };
-    render::picture(&scene.cloud, &detection.classes, view, [1600, 600]).save_png(&png)?;
+    render_classes(&scene.cloud, &detection.classes, view, 1600, 600).save_png(&png)?;
 
     let matrix = ConfusionMatrix::from_labels(&truth, &detection.codes())?;
     let n = scene.cloud.len();

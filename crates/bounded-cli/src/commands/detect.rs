@@ -1,17 +1,16 @@
 //! `bounded detect`: label every point of a cloud file, or of several files as one cloud
 //! (or each on its own with `--separate`).
 
-use super::{peak_memory, rate, sources};
+use super::{grouped, peak_memory, rate};
 use crate::cli::DetectArgs;
-use crate::pipeline::{self, Detection};
+use crate::pipeline;
 use crate::progress;
 use anyhow::{Context, Result, bail};
 use bounded_data::DataError;
 use bounded_data::format::{self, Format};
 use bounded_data::table::PointTable;
-use bounded_features::FeatureConfig;
 use bounded_geom::{GeomError, PointCloud};
-use bounded_nn::Classifier;
+use bounded_nn::{Detection, Detector};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -19,8 +18,12 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on unknown formats and unusable outputs before any work is done.
     let (outputs, into_directory) = output_paths(args)?;
-    let classifier = pipeline::stages(sources::model(args.model.as_deref())?, args.fast)?;
-    let config = pipeline::feature_config(&classifier, args.scales.as_deref())?;
+    let detector = pipeline::detector(pipeline::ModelOptions {
+        model: args.model.as_deref(),
+        scales: args.scales.as_deref(),
+        fast: args.fast,
+        sensitivity: args.sensitivity,
+    })?;
 
     // The inputs labelled together: all of them (tiles of one cloud), or each on its own.
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
@@ -33,8 +36,7 @@ pub fn run(args: &DetectArgs) -> Result<()> {
             group_outputs,
             into_directory.then_some(&*args.output),
             args,
-            &classifier,
-            &config,
+            &detector,
         )?;
         n += detection.classes.len();
         for (total, count) in counts.iter_mut().zip(detection.class_counts()) {
@@ -51,8 +53,12 @@ pub fn run(args: &DetectArgs) -> Result<()> {
         all => format!("{} files to {}", all.len(), args.output.display()),
     };
     eprintln!(
-        "{n} points: {sharp} sharp edge, {boundary} boundary, {non_edge} non-edge; \
-         detection {:.2} s ({}), total {seconds:.2} s{memory}; wrote {wrote}",
+        "{} points: {} sharp edge, {} boundary, {} non-edge; detection {:.2} s ({}), \
+         total {seconds:.2} s{memory}; wrote {wrote}",
+        grouped(n),
+        grouped(sharp),
+        grouped(boundary),
+        grouped(non_edge),
         detecting.as_secs_f64(),
         rate(n, detecting.as_secs_f64()),
     );
@@ -66,8 +72,7 @@ fn label(
     outputs: &[&Path],
     directory: Option<&Path>,
     args: &DetectArgs,
-    classifier: &Classifier,
-    config: &FeatureConfig,
+    detector: &Detector,
 ) -> Result<Detection> {
     let mut tables = Vec::with_capacity(inputs.len());
     for input in inputs {
@@ -77,8 +82,8 @@ fn label(
         tables.push(table);
     }
     let detection = match tables.as_slice() {
-        [table] => pipeline::detect(&table.cloud, classifier, config, true),
-        _ => pipeline::detect(&joined(&tables)?, classifier, config, true),
+        [table] => pipeline::detect(detector, &table.cloud, true),
+        _ => pipeline::detect(detector, &joined(&tables)?, true),
     }
     .with_context(|| {
         let names: Vec<_> = inputs.iter().map(|p| p.display().to_string()).collect();
@@ -90,15 +95,33 @@ fn label(
             .with_context(|| format!("cannot create {}", directory.display()))?;
     }
     let writing = progress::spinner("write");
-    // Each table's results are the next `len` of the joined run.
-    let written = (tables.iter().zip(outputs)).try_fold(0, |first, (table, output)| {
+    // Each table's results are the next `len` of the joined run. A failure names the outputs
+    // already written: they are complete and stay.
+    let mut first = 0;
+    for (k, (table, output)) in tables.iter().zip(outputs).enumerate() {
         let range = first..first + table.len();
         let classes = &detection.classes[range.clone()];
         let probabilities = &detection.probabilities[range.clone()];
-        format::write_annotated(output, table, classes, probabilities).map(|()| range.end)
-    });
+        let written = format::write_annotated(output, table, classes, probabilities);
+        if let Err(e) = written {
+            writing.finish_and_clear();
+            let done: Vec<_> = outputs[..k]
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect();
+            return Err(match done.as_slice() {
+                [] => e.into(),
+                done => anyhow::Error::from(e).context(format!(
+                    "{} of {} outputs were written before this failure and stay complete: {}",
+                    done.len(),
+                    outputs.len(),
+                    done.join(", ")
+                )),
+            });
+        }
+        first = range.end;
+    }
     writing.finish_and_clear();
-    written?;
     Ok(detection)
 }
 
@@ -171,6 +194,8 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
         if !parent.is_dir() {
             bail!("{}: output directory does not exist", parent.display());
         }
+        refuse_replacing_input(&args.inputs[0], output)?;
+        writable(parent)?;
         return Ok((vec![output.clone()], false));
     }
     if output.exists() && !output.is_dir() {
@@ -179,14 +204,14 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
             output.display()
         );
     }
-    let directory = output.canonicalize().ok();
     let mut outputs: Vec<PathBuf> = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
         let name =
             (input.file_name()).with_context(|| format!("{}: no file name", input.display()))?;
         let mut path = output.join(name);
         if let Some(ext) = &args.format {
-            path.set_extension(ext);
+            // `--format .las` means the extension, not `name..las`.
+            path.set_extension(ext.trim_start_matches('.'));
         }
         Format::from_path(&path)?;
         if outputs.contains(&path) {
@@ -196,25 +221,57 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
                 path.display()
             );
         }
-        let replaces_input = directory
-            .as_ref()
-            .zip(path.file_name())
-            .is_some_and(|(d, f)| input.canonicalize().is_ok_and(|i| i == d.join(f)));
-        if replaces_input {
-            bail!(
-                "{}: its result would replace it; choose another output directory or --format",
-                input.display()
-            );
+        for input in &args.inputs {
+            refuse_replacing_input(input, &path)?;
         }
         outputs.push(path);
     }
     let existing = (output.ancestors()).find(|a| !a.as_os_str().is_empty() && a.exists());
-    if let Some(file) = existing.filter(|a| !a.is_dir()) {
-        bail!(
+    match existing {
+        Some(file) if !file.is_dir() => bail!(
             "cannot create {}: {} is not a directory",
             output.display(),
             file.display()
-        );
+        ),
+        Some(directory) => writable(directory)?,
+        None => writable(Path::new("."))?,
     }
     Ok((outputs, true))
+}
+
+/// Refuses an `output` that is `input` itself (by file identity, so a hard link or another
+/// spelling of the path counts too): the result would replace the data it is computed from.
+fn refuse_replacing_input(input: &Path, output: &Path) -> Result<()> {
+    if same_file(input, output) {
+        bail!(
+            "{}: the output {} is this input; its result would replace it (choose another \
+             output or --format)",
+            input.display(),
+            output.display()
+        );
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name one existing file.
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        #[cfg(unix)]
+        (Ok(a), Ok(b)) => {
+            use std::os::unix::fs::MetadataExt;
+            (a.dev(), a.ino()) == (b.dev(), b.ino())
+        }
+        #[cfg(not(unix))]
+        (Ok(_), Ok(_)) => a.canonicalize().ok() == b.canonicalize().ok(),
+        _ => false,
+    }
+}
+
+/// Fails now, before any work, when no file can be created in `directory`.
+fn writable(directory: &Path) -> Result<()> {
+    tempfile::Builder::new()
+        .prefix(".bounded-probe")
+        .tempfile_in(directory)
+        .map(drop)
+        .with_context(|| format!("cannot write to {}", directory.display()))
 }

@@ -1,20 +1,20 @@
 //! `bounded generate`: write a synthetic labelled set as binary PLY files.
 
-use super::sources;
 use crate::cli::GenerateArgs;
 use crate::progress;
 use anyhow::{Context, Result};
 use bounded_data::format;
-use bounded_data::synth::{SetConfig, generate_one};
+use bounded_data::synth::{SetConfig, SetKind, generate_one};
 use rayon::prelude::*;
 use std::num::NonZeroUsize;
 use std::time::Instant;
 
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let start = Instant::now();
-    let kind = sources::set_kind(&args.kind)?;
-    let mut config = SetConfig::new(kind, args.seed, args.shapes.map_or(60, NonZeroUsize::get));
-    sources::set_noise(&mut config, &args.noise)?;
+    let kind = SetKind::from_name(&args.kind)?;
+    let config = SetConfig::new(kind, args.seed, args.shapes.map_or(60, NonZeroUsize::get))
+        .with_noise(args.noise.noise.as_deref(), args.noise.noise_along.into())
+        .context("--noise")?;
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
     let bar = progress::bar("generate", config.shapes as u64, "clouds");

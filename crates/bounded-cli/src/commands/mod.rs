@@ -6,11 +6,18 @@ mod detect;
 mod eval;
 mod generate;
 mod render;
-mod sources;
 mod train;
 
 use crate::cli::Command;
+use crate::progress;
 use anyhow::Result;
+use bounded_data::LabelledCloud;
+use bounded_data::dataset::{self, Role};
+use bounded_data::peers::PeerResult;
+use bounded_geom::Class;
+use bounded_nn::report::{self, MethodResults, ModelResult, Published};
+use bounded_nn::{BinaryConfusion, Detector, TrainingCloud};
+use std::path::Path;
 
 /// Runs one subcommand.
 pub fn run(command: Command) -> Result<()> {
@@ -25,6 +32,54 @@ pub fn run(command: Command) -> Result<()> {
     }
 }
 
+/// The labelled evaluation clouds of `dir` (its evaluation role, or every cloud), with a bar.
+fn load_set(dir: &Path, smooth_edge: Class) -> Result<Vec<(String, LabelledCloud)>> {
+    let bar = progress::bar("load", 0, "clouds");
+    let clouds = dataset::load(dir, &[Role::Evaluation], smooth_edge, &mut |done, all| {
+        bar.set_length(all as u64);
+        bar.set_position(done as u64);
+    });
+    bar.finish_and_clear();
+    Ok(clouds?)
+}
+
+/// The clouds as the library's labelled clouds.
+fn training_clouds(clouds: &[(String, LabelledCloud)]) -> Vec<TrainingCloud<'_>> {
+    (clouds.iter())
+        .map(|(name, c)| TrainingCloud {
+            name,
+            cloud: &c.cloud,
+            labels: &c.labels,
+        })
+        .collect()
+}
+
+/// Classifies every cloud and compares with its labels, with a bar.
+fn evaluate(detector: &Detector, clouds: &[(String, LabelledCloud)]) -> Result<Vec<ModelResult>> {
+    let bar = progress::bar("evaluate", clouds.len() as u64, "clouds");
+    let results = report::evaluate(detector, &training_clouds(clouds), &mut |done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    Ok(results?)
+}
+
+/// The published methods of `dataset` among `peers`, restricted to `models`.
+fn peer_methods(peers: &[PeerResult], dataset: &str, models: &[String]) -> Vec<MethodResults> {
+    let rows = (peers.iter().filter(|p| p.dataset == dataset)).map(|p| Published {
+        method: &p.description,
+        positive: &p.gt_positive,
+        model: &p.model,
+        confusion: BinaryConfusion {
+            tp: p.tp,
+            fp: p.fp,
+            tn: p.tn,
+            fn_: p.fn_,
+        },
+    });
+    report::peer_methods(rows, models)
+}
+
 /// The process' peak resident memory so far (VmHWM of /proc/self/status) in MiB, where the
 /// platform reports it.
 fn peak_memory() -> Option<String> {
@@ -34,6 +89,19 @@ fn peak_memory() -> Option<String> {
     Some(format!("{:.0} MiB", kib / 1024.0))
 }
 
+/// `n` with thousands separators (1,045,348), for summaries.
+fn grouped(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
 /// Points per second, for summaries.
 fn rate(points: usize, seconds: f64) -> String {
     let per_second = points as f64 / seconds.max(1e-9);
@@ -41,5 +109,19 @@ fn rate(points: usize, seconds: f64) -> String {
         format!("{:.2} M points/s", per_second / 1e6)
     } else {
         format!("{:.0} k points/s", per_second / 1e3)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::grouped;
+
+    #[test]
+    fn thousands_are_separated() {
+        assert_eq!(grouped(0), "0");
+        assert_eq!(grouped(999), "999");
+        assert_eq!(grouped(1000), "1,000");
+        assert_eq!(grouped(522_674), "522,674");
+        assert_eq!(grouped(1_045_348), "1,045,348");
     }
 }

@@ -1,20 +1,12 @@
 //! `bounded render`: a shaded picture of a cloud coloured by class.
 
-use super::sources;
-use crate::canvas::{Canvas, Rgb};
 use crate::cli::{ColourBy, RenderArgs};
 use crate::pipeline;
-use crate::render::{View, render};
 use anyhow::{Context, Result, bail};
-use bounded_data::format;
 use bounded_data::labels::{self, Convention};
-use bounded_geom::{Class, PointCloud};
-
-/// The picture of `cloud` with one class per point.
-pub fn picture(cloud: &PointCloud, classes: &[Class], view: View, size: [usize; 2]) -> Canvas {
-    let colours: Vec<Rgb> = classes.iter().map(|&c| format::class_colour(c)).collect();
-    render(cloud.points(), &colours, view, size[0], size[1])
-}
+use bounded_data::picture::{View, render_classes};
+use bounded_data::{dataset, format};
+use bounded_geom::Class;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let [width, height] = args.size[..] else {
@@ -39,16 +31,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             }
             labels::from_table(table.clone(), Convention::ClassProperty, &args.input)?.labels
         }
-        ColourBy::Truth => sources::labelled(&args.input, Class::NonEdge)?.labels,
+        ColourBy::Truth => dataset::read_labelled(&args.input, Class::NonEdge)?.labels,
         ColourBy::Detect => {
-            let classifier = sources::model(None)?;
-            let config = pipeline::feature_config(&classifier, None)?;
-            pipeline::detect(&table.cloud, &classifier, &config, true)
+            let detector = pipeline::detector(Default::default())?;
+            pipeline::detect(&detector, &table.cloud, true)
                 .with_context(|| args.input.display().to_string())?
                 .classes
         }
     };
-    picture(&table.cloud, &classes, view, [width, height]).save_png(&args.output)?;
+    render_classes(&table.cloud, &classes, view, width, height).save_png(&args.output)?;
     eprintln!("{} points; wrote {}", table.len(), args.output.display());
     Ok(())
 }

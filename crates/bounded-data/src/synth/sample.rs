@@ -14,7 +14,8 @@
 
 use super::grid::{Grid, bounds};
 use super::mesh::{Features, Mesh, Polyline};
-use super::vec3::{V3, add, dot, lerp, norm, normalize, scale, segment_distance, sub};
+use super::segments::SegmentIndex;
+use super::vec3::{V3, add, dot, lerp, norm, normalize, scale, sub};
 use bounded_geom::Class;
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -44,7 +45,8 @@ pub const W_BORDER: f64 = 0.66;
 
 /// Dart-throwing fill levels: (attempts per `r^2` of surface, points per `r^2` reached with
 /// minimum distance `r`), measured on a cube. More attempts give a more regular fill.
-const FILL_LEVELS: [(f64, f64); 4] = [(2.0, 0.465), (4.0, 0.531), (7.0, 0.569), (10.0, 0.587)];
+pub(crate) const FILL_LEVELS: [(f64, f64); 4] =
+    [(2.0, 0.465), (4.0, 0.531), (7.0, 0.569), (10.0, 0.587)];
 
 /// Points and labels on the clean surface.
 pub(crate) struct Sampled {
@@ -279,41 +281,6 @@ fn random(
 
 fn spacing_max(surface: &Surface, density: &Density, target: usize) -> f64 {
     (surface.weighted_area / (target as f64 * (1.0 - density.gradient))).sqrt()
-}
-
-/// Polylines cut into pieces no longer than the query radius, bucketed by their midpoints.
-struct SegmentIndex {
-    grid: Grid,
-    pieces: Vec<(V3, V3)>,
-}
-
-impl SegmentIndex {
-    /// An index answering distance queries up to `max_radius` around the box `box_`.
-    fn new(lines: &[Polyline], max_radius: f64, box_: [V3; 2]) -> Self {
-        // A point within max_radius of a piece is within 1.5 max_radius of its midpoint.
-        let mut grid = Grid::new(2.0 * max_radius, box_);
-        let mut pieces = Vec::new();
-        for (a, b) in lines.iter().flat_map(Polyline::segments) {
-            let k = (norm(sub(b, a)) / max_radius).ceil().max(1.0) as usize;
-            for j in 0..k {
-                let (u, v) = (
-                    lerp(a, b, j as f64 / k as f64),
-                    lerp(a, b, (j + 1) as f64 / k as f64),
-                );
-                grid.insert(lerp(u, v, 0.5));
-                pieces.push((u, v));
-            }
-        }
-        Self { grid, pieces }
-    }
-
-    /// True when a piece passes closer than `r` to `p`.
-    fn within(&self, p: V3, r: f64) -> bool {
-        self.grid.search_near(p, |i, _| {
-            let (a, b) = self.pieces[i as usize];
-            segment_distance(p, a, b) < r
-        })
-    }
 }
 
 #[cfg(test)]

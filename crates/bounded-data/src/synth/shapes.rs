@@ -330,7 +330,7 @@ fn stairs(rng: &mut impl Rng) -> Vec<P2> {
 }
 
 /// A size drawn log-uniformly from `lo..hi`: small details as often as large ones.
-fn detail(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
+pub(crate) fn detail(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
     rng.random_range(lo.ln()..hi.ln()).exp()
 }
 

@@ -54,6 +54,18 @@ pub(crate) fn segment_distance(p: V3, a: V3, b: V3) -> f64 {
     norm(sub(p, lerp(a, b, t)))
 }
 
+/// Two unit vectors completing the unit vector `n` to a right-handed orthonormal frame
+/// (`e1 x e2 = n`).
+pub(crate) fn tangent_frame(n: V3) -> (V3, V3) {
+    let helper = if n[0].abs() < 0.6 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let e1 = normalize(cross(helper, n));
+    (e1, cross(n, e1))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

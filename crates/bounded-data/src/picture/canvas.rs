@@ -2,7 +2,8 @@
 //!
 //! Pictures (renders, plots) need no font files or graphics stack this way.
 
-use anyhow::{Context, Result};
+use crate::DataError;
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// An RGB colour.
@@ -28,7 +29,7 @@ impl Canvas {
 
     /// The colour at (x, y).
     #[cfg(test)]
-    pub fn get(&self, x: usize, y: usize) -> Rgb {
+    pub(crate) fn get(&self, x: usize, y: usize) -> Rgb {
         let i = 3 * (y * self.width + x);
         [self.pixels[i], self.pixels[i + 1], self.pixels[i + 2]]
     }
@@ -105,18 +106,23 @@ impl Canvas {
         text.chars().count() as i64 * 6 * scale
     }
 
-    /// Writes the canvas as an 8-bit RGB PNG, atomically (temporary file, then rename).
-    pub fn save_png(&self, path: &Path) -> Result<()> {
-        crate::atomic::write_with(path, |file| {
-            let mut encoder = png::Encoder::new(file, self.width as u32, self.height as u32);
+    /// Writes the canvas as an 8-bit RGB PNG, atomically: a failure leaves no file (and an
+    /// existing one untouched).
+    pub fn save_png(&self, path: &Path) -> Result<(), DataError> {
+        let png = |source| DataError::Png {
+            path: path.to_path_buf(),
+            source,
+        };
+        crate::format::write_atomic(path, |file| {
+            let mut out = BufWriter::new(file);
+            let mut encoder = png::Encoder::new(&mut out, self.width as u32, self.height as u32);
             encoder.set_color(png::ColorType::Rgb);
             encoder.set_depth(png::BitDepth::Eight);
-            let mut writer = encoder.write_header()?;
-            writer.write_image_data(&self.pixels)?;
-            writer.finish()?;
-            Ok(())
+            let mut writer = encoder.write_header().map_err(png)?;
+            writer.write_image_data(&self.pixels).map_err(png)?;
+            writer.finish().map_err(png)?;
+            out.flush().map_err(|e| DataError::io(path, e))
         })
-        .with_context(|| format!("{}: cannot write the PNG picture", path.display()))
     }
 }
 
@@ -204,5 +210,31 @@ mod tests {
         // '-': full row 3 of the second glyph, 6 pixels to the right.
         assert!((6..11).all(|x| c.get(x, 3) == [0; 3]));
         assert_eq!(Canvas::text_width("1-", 2), 24);
+    }
+
+    #[test]
+    fn png_round_trips_and_a_failed_save_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut c = Canvas::new(3, 2, [10, 20, 30]);
+        c.set(2, 1, [1, 2, 3]);
+        let path = dir.path().join("c.png");
+        c.save_png(&path).unwrap();
+        let file = std::io::BufReader::new(std::fs::File::open(&path).unwrap());
+        let mut reader = png::Decoder::new(file).read_info().unwrap();
+        let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut pixels).unwrap();
+        assert_eq!((info.width, info.height), (3, 2));
+        assert_eq!(info.color_type, png::ColorType::Rgb);
+        assert_eq!(pixels, c.pixels);
+
+        // The encoder refuses an empty picture: a named error, and no file at all.
+        let empty = dir.path().join("empty.png");
+        let e = Canvas::new(0, 4, [0; 3]).save_png(&empty).unwrap_err();
+        assert!(matches!(e, DataError::Png { .. }), "{e}");
+        assert!(
+            e.to_string().starts_with(&empty.display().to_string()),
+            "{e}"
+        );
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }

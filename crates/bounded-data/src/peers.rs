@@ -1,7 +1,23 @@
 //! The published peers' per-model confusion counts (`peers.csv`), for side-by-side tables.
+//!
+//! ```
+//! let dir = tempfile::tempdir()?;
+//! let path = dir.path().join("peers.csv");
+//! std::fs::write(
+//!     &path,
+//!     "dataset,model,method,description,gt_positive,tp,fp,tn,fn\n\
+//!      abc,0133,ca,CA covariance analysis,sharp,1,2,3,4\n",
+//! )?;
+//! let peers = bounded_data::peers::read(&path)?;
+//! assert_eq!((peers[0].method.as_str(), peers[0].fn_), ("ca", 4));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
-use anyhow::{Context, Result, bail};
+use crate::DataError;
 use std::path::Path;
+
+/// The header line of a peers table.
+const HEADER: &str = "dataset,model,method,description,gt_positive,tp,fp,tn,fn";
 
 /// One published result: a method's confusion counts on one model.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,20 +43,19 @@ pub struct PeerResult {
 }
 
 /// Reads `peers.csv` (columns dataset,model,method,description,gt_positive,tp,fp,tn,fn).
-pub fn read(path: &Path) -> Result<Vec<PeerResult>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read the peers table", path.display()))?;
-    parse(&text).with_context(|| format!("{}: malformed peers table", path.display()))
+pub fn read(path: &Path) -> Result<Vec<PeerResult>, DataError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DataError::io(path, e))?;
+    parse(&text).map_err(|what| DataError::malformed(path, what))
 }
 
-fn parse(text: &str) -> Result<Vec<PeerResult>> {
+/// The rows of a peers table, or what is wrong, naming the line.
+fn parse(text: &str) -> Result<Vec<PeerResult>, String> {
     let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, header))
-            if header.trim() == "dataset,model,method,description,gt_positive,tp,fp,tn,fn" => {}
-        _ => bail!(
-            "line 1: expected the header dataset,model,method,description,gt_positive,tp,fp,tn,fn"
-        ),
+    if lines
+        .next()
+        .is_none_or(|(_, header)| header.trim() != HEADER)
+    {
+        return Err(format!("line 1: expected the header {HEADER}"));
     }
     let mut rows = Vec::new();
     for (n, line) in lines {
@@ -49,10 +64,14 @@ fn parse(text: &str) -> Result<Vec<PeerResult>> {
         }
         let cols: Vec<&str> = line.trim().split(',').collect();
         if cols.len() != 9 {
-            bail!("line {}: expected 9 columns, found {}", n + 1, cols.len());
+            return Err(format!(
+                "line {}: expected 9 columns, found {}",
+                n + 1,
+                cols.len()
+            ));
         }
-        let count = |i: usize| -> Result<u64> {
-            cols[i].parse().with_context(|| {
+        let count = |i: usize| -> Result<u64, String> {
+            cols[i].parse().map_err(|_| {
                 format!(
                     "line {}: column {} is not a count: {:?}",
                     n + 1,
@@ -92,8 +111,28 @@ mod tests {
         );
         assert_eq!(rows[0].model, "0133");
         let bad = ok.replace(",4\n", ",x\n");
-        let err = format!("{:#}", parse(&bad).unwrap_err());
+        let err = parse(&bad).unwrap_err();
         assert!(err.contains("line 2") && err.contains("column 9"), "{err}");
-        assert!(parse("a,b\n").is_err());
+        assert!(
+            parse("a,b\n")
+                .unwrap_err()
+                .contains("line 1: expected the header")
+        );
+        assert!(
+            parse(&ok.replace(",4\n", "\n"))
+                .unwrap_err()
+                .contains("9 columns, found 8")
+        );
+    }
+
+    #[test]
+    fn read_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("peers.csv");
+        let e = read(&path).unwrap_err();
+        assert!(matches!(e, DataError::Io { .. }), "{e}");
+        std::fs::write(&path, "dataset,model\n").unwrap();
+        let e = read(&path).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("{}: line 1", path.display())), "{e}");
     }
 }

@@ -4,7 +4,9 @@
 //! and shading comes from the depth buffer's own gradient (no normals needed), which makes
 //! creases and curvature readable.
 
-use crate::canvas::{Canvas, Rgb};
+use super::{Canvas, Rgb};
+use crate::format::class_colour;
+use bounded_geom::{Class, PointCloud, cross, dot};
 
 /// Where the camera looks from.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,6 +25,19 @@ impl Default for View {
             elevation: 30.0,
         }
     }
+}
+
+/// The picture of `cloud` with every point in the colour of its class (as
+/// [`class_colour`] writes them).
+pub fn render_classes(
+    cloud: &PointCloud,
+    classes: &[Class],
+    view: View,
+    width: usize,
+    height: usize,
+) -> Canvas {
+    let colours: Vec<Rgb> = classes.iter().map(|&c| class_colour(c)).collect();
+    render(cloud.points(), &colours, view, width, height)
 }
 
 /// Renders `points` with per-point `colours` into a `width` x `height` picture.
@@ -119,18 +134,6 @@ pub fn render(
         }
     }
     canvas
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn normalise(a: [f64; 3]) -> [f64; 3] {

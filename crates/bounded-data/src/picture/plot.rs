@@ -1,7 +1,7 @@
 //! Precision-recall scatter plots, as in the paper's figure: one dot per model, one colour
 //! per method.
 
-use crate::canvas::{Canvas, Rgb};
+use super::{Canvas, Rgb};
 
 /// One method's points: (recall, precision) per model.
 pub struct Series {

@@ -1,0 +1,256 @@
+//! Calibration: whether a predicted probability means what it says. A reliability diagram
+//! bins the predictions of one class by probability and compares each bin's mean probability
+//! with how often the class is true there; the expected calibration error (ECE) is the mean
+//! gap, weighted by the bins' counts.
+
+use std::fmt::Write;
+
+use bounded_geom::Class;
+
+use crate::{BinaryConfusion, Detector, N_CLASSES, NnError, Scores, TrainingCloud, class_at};
+
+/// Sensitivities at which [`sweep`] scores a detection by default: the range a user would
+/// choose from, in steps of 0.1.
+pub const SENSITIVITIES: [f32; 9] = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
+
+/// The sharp-edge confusion of one cloud's `probabilities` against its `truth` (class codes)
+/// at each of `sensitivities` (see [`Detector::with_sensitivity`](crate::Detector::with_sensitivity)),
+/// from one detection.
+pub fn sweep(
+    probabilities: &[[f32; N_CLASSES]],
+    truth: &[u8],
+    sensitivities: &[f32],
+) -> Vec<BinaryConfusion> {
+    let sharp = Class::Sharp as u8;
+    sensitivities
+        .iter()
+        .map(|&s| {
+            let mut c = BinaryConfusion::default();
+            for (p, &t) in probabilities.iter().zip(truth) {
+                let predicted = class_at(p, Some(s)) as u8 == sharp;
+                match (t == sharp, predicted) {
+                    (true, true) => c.tp += 1,
+                    (false, true) => c.fp += 1,
+                    (false, false) => c.tn += 1,
+                    (true, false) => c.fn_ += 1,
+                }
+            }
+            c
+        })
+        .collect()
+}
+
+/// One bin of a reliability diagram.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Bin {
+    /// Predictions that fell in the bin.
+    pub count: u64,
+    /// Sum of their probabilities.
+    pub probability_sum: f64,
+    /// How many of them were of the class.
+    pub positives: u64,
+}
+
+impl Bin {
+    /// Mean predicted probability (0 for an empty bin).
+    pub fn mean_probability(&self) -> f64 {
+        if self.count == 0 {
+            0.0
+        } else {
+            self.probability_sum / self.count as f64
+        }
+    }
+
+    /// Observed frequency of the class (0 for an empty bin).
+    pub fn frequency(&self) -> f64 {
+        if self.count == 0 {
+            0.0
+        } else {
+            self.positives as f64 / self.count as f64
+        }
+    }
+}
+
+/// A reliability diagram of equal-width probability bins, filled one prediction at a time
+/// (so many clouds can go into one).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reliability {
+    /// Bin `i` holds probabilities in `[i / n, (i + 1) / n)`; the last also holds 1.
+    pub bins: Vec<Bin>,
+}
+
+impl Reliability {
+    /// An empty diagram of `bins` bins (at least 1).
+    pub fn new(bins: usize) -> Self {
+        Self {
+            bins: vec![Bin::default(); bins.max(1)],
+        }
+    }
+
+    /// Adds one prediction: the class's `probability` and whether the point is of the class.
+    /// Probabilities outside [0, 1] go to the nearest end bin; NaN is not counted.
+    pub fn add(&mut self, probability: f32, positive: bool) {
+        if probability.is_nan() {
+            return;
+        }
+        let n = self.bins.len();
+        let p = probability.clamp(0.0, 1.0);
+        let bin = &mut self.bins[((p * n as f32) as usize).min(n - 1)];
+        bin.count += 1;
+        bin.probability_sum += f64::from(p);
+        bin.positives += u64::from(positive);
+    }
+
+    /// Predictions counted.
+    pub fn count(&self) -> u64 {
+        self.bins.iter().map(|b| b.count).sum()
+    }
+
+    /// Expected calibration error: the bins' gaps between mean probability and frequency,
+    /// weighted by their counts (0 for no predictions).
+    pub fn expected_calibration_error(&self) -> f64 {
+        let total = self.count();
+        if total == 0 {
+            return 0.0;
+        }
+        (self.bins.iter())
+            .map(|b| b.count as f64 * (b.mean_probability() - b.frequency()).abs())
+            .sum::<f64>()
+            / total as f64
+    }
+
+    /// The diagram as a Markdown table (non-empty bins).
+    pub fn table(&self) -> String {
+        let n = self.bins.len() as f64;
+        let mut out = String::from(
+            "| probability | points | mean probability | observed frequency |\n|---|---|---|---|\n",
+        );
+        for (i, b) in self.bins.iter().enumerate().filter(|(_, b)| b.count > 0) {
+            let _ = writeln!(
+                out,
+                "| {:.2}-{:.2} | {} | {:.3} | {:.3} |",
+                i as f64 / n,
+                (i + 1) as f64 / n,
+                b.count,
+                b.mean_probability(),
+                b.frequency()
+            );
+        }
+        out
+    }
+}
+
+/// A detector's probabilities over labelled clouds: reliability diagrams of `p_sharp` and
+/// `p_boundary`, and the sharp-edge confusions at every one of [`SENSITIVITIES`], per cloud.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibration {
+    /// `p_sharp` against the sharp labels, all clouds.
+    pub sharp: Reliability,
+    /// `p_boundary` against the boundary labels, all clouds.
+    pub boundary: Reliability,
+    /// Per cloud, the confusion at each of [`SENSITIVITIES`].
+    pub sweeps: Vec<Vec<BinaryConfusion>>,
+}
+
+impl Calibration {
+    /// Runs `detector` over `clouds` once each.
+    pub fn measure(detector: &Detector, clouds: &[TrainingCloud<'_>]) -> Result<Self, NnError> {
+        let mut calibration = Self {
+            sharp: Reliability::new(10),
+            boundary: Reliability::new(10),
+            sweeps: Vec::with_capacity(clouds.len()),
+        };
+        for c in clouds {
+            let detection = detector.detect(c.cloud).map_err(|e| NnError::Cloud {
+                name: c.name.to_string(),
+                source: Box::new(e),
+            })?;
+            let truth = Class::codes(c.labels);
+            for (p, &t) in detection.probabilities.iter().zip(&truth) {
+                calibration.sharp.add(p[1], t == Class::Sharp as u8);
+                calibration.boundary.add(p[2], t == Class::Boundary as u8);
+            }
+            (calibration.sweeps).push(sweep(&detection.probabilities, &truth, &SENSITIVITIES));
+        }
+        Ok(calibration)
+    }
+
+    /// Median sharp-edge MCC over the clouds at each of [`SENSITIVITIES`].
+    pub fn median_mcc(&self) -> Vec<f64> {
+        (0..SENSITIVITIES.len())
+            .map(|i| {
+                let at: Vec<_> = self.sweeps.iter().map(|s| s[i]).collect();
+                Scores::median(&at).map_or(0.0, |s| s.mcc)
+            })
+            .collect()
+    }
+
+    /// The sensitivity of the highest median MCC (the first of equals).
+    pub fn best_sensitivity(&self) -> f32 {
+        let mcc = self.median_mcc();
+        let best = (0..mcc.len()).fold(0, |b, i| if mcc[i] > mcc[b] { i } else { b });
+        SENSITIVITIES[best]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hand_computed_error() {
+        let mut r = Reliability::new(10);
+        // Bins 0, 1, 8 and 9 get one prediction each: gaps 0.05, 0.85, 0.85, 0.05.
+        for (p, positive) in [(0.05, false), (0.15, true), (0.85, false), (0.95, true)] {
+            r.add(p, positive);
+        }
+        assert_eq!(r.count(), 4);
+        assert!((r.expected_calibration_error() - 0.45).abs() < 1e-6);
+        assert_eq!(r.bins[1].frequency(), 1.0);
+        assert!((r.bins[8].mean_probability() - 0.85).abs() < 1e-6);
+        // Ends: 1 in the last bin, out-of-range values clamped, NaN left out.
+        r.add(1.0, true);
+        r.add(-0.5, false);
+        r.add(f32::NAN, true);
+        assert_eq!((r.bins[9].count, r.bins[0].count, r.count()), (2, 2, 6));
+    }
+
+    #[test]
+    fn sweep_counts_by_hand() {
+        // Truth: sharp, sharp, non-edge, boundary.
+        let p = [
+            [0.3, 0.7, 0.0],
+            [0.6, 0.4, 0.0],
+            [0.8, 0.2, 0.0],
+            [0.1, 0.5, 0.4],
+        ];
+        let truth = [1, 1, 0, 2];
+        let at = sweep(&p, &truth, &[0.35, 0.65, 0.9]);
+        // 0.35: threshold 0.65, only the first is sharp.
+        assert_eq!((at[0].tp, at[0].fp, at[0].tn, at[0].fn_), (1, 0, 2, 1));
+        // 0.65: threshold 0.35: the first, second and fourth (0.5 >= 0.4).
+        assert_eq!((at[1].tp, at[1].fp, at[1].tn, at[1].fn_), (2, 1, 1, 0));
+        // 0.9: threshold 0.1: all four.
+        assert_eq!((at[2].tp, at[2].fp, at[2].tn, at[2].fn_), (2, 2, 0, 0));
+    }
+
+    #[test]
+    fn calibrated_predictions_have_no_error() {
+        let mut r = Reliability::new(5);
+        // 10 predictions of 0.3, 3 of them right; 4 of 0.75, 3 of them right.
+        for i in 0..10 {
+            r.add(0.3, i < 3);
+        }
+        for i in 0..4 {
+            r.add(0.75, i < 3);
+        }
+        assert!(r.expected_calibration_error() < 1e-6, "{r:?}");
+        assert_eq!(Reliability::new(0).bins.len(), 1);
+        assert_eq!(Reliability::new(3).expected_calibration_error(), 0.0);
+        assert!(
+            r.table().contains("| 0.20-0.40 | 10 | 0.300 | 0.300 |"),
+            "{}",
+            r.table()
+        );
+    }
+}

@@ -1,0 +1,307 @@
+//! Evaluation reports: a detector's confusions on labelled clouds, per model and as the
+//! medians over models that the paper's tables give, beside published methods, as Markdown.
+//!
+//! ```
+//! use bounded_nn::BinaryConfusion;
+//! use bounded_nn::report::{MethodResults, medians_table};
+//!
+//! let method = MethodResults {
+//!     name: "ours".into(),
+//!     positive: "sharp".into(),
+//!     models: vec![("cube".into(), BinaryConfusion { tp: 1, fp: 1, tn: 2, fn_: 0 })],
+//! };
+//! let table = medians_table(&[method]);
+//! assert!(table.ends_with("| ours | sharp | 1 | 0.500 | 1.000 | 0.577 | 0.667 | 0.750 | 0.500 |\n"));
+//! ```
+
+use std::fmt::Write;
+
+use bounded_geom::Class;
+
+use crate::{BinaryConfusion, ConfusionMatrix, Detector, NnError, Scores, TrainingCloud};
+
+/// One evaluated cloud.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelResult {
+    /// Cloud name (file stem).
+    pub name: String,
+    /// 3-class confusion (rows truth, columns prediction).
+    pub matrix: ConfusionMatrix,
+}
+
+/// A method's per-model confusions, for tables and plots.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodResults {
+    /// Method name as shown.
+    pub name: String,
+    /// What it counted as positive.
+    pub positive: String,
+    /// (model, confusion) in table order.
+    pub models: Vec<(String, BinaryConfusion)>,
+}
+
+impl MethodResults {
+    /// `results` as the method `name`, with `positive` the positive class.
+    pub fn of(name: &str, results: &[ModelResult], positive: Class) -> Self {
+        Self {
+            name: name.to_string(),
+            positive: positive.name().to_string(),
+            models: (results.iter())
+                .map(|r| (r.name.clone(), r.matrix.binary(positive as u8)))
+                .collect(),
+        }
+    }
+
+    /// Median scores over the models; `None` without models.
+    pub fn median(&self) -> Option<Scores> {
+        let confusions: Vec<_> = self.models.iter().map(|m| m.1).collect();
+        Scores::median(&confusions)
+    }
+}
+
+/// One published result: a method's confusion on one model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Published<'a> {
+    /// The method's name as shown.
+    pub method: &'a str,
+    /// What it counted as positive.
+    pub positive: &'a str,
+    /// The model (cloud) name.
+    pub model: &'a str,
+    /// Its counts on that model.
+    pub confusion: BinaryConfusion,
+}
+
+/// The published methods among `rows` on the models in `models`, each with its models in row
+/// order, the methods in the order they first appear.
+pub fn peer_methods<'a>(
+    rows: impl IntoIterator<Item = Published<'a>>,
+    models: &[String],
+) -> Vec<MethodResults> {
+    let mut methods: Vec<MethodResults> = Vec::new();
+    for row in rows {
+        if !models.iter().any(|m| m == row.model) {
+            continue;
+        }
+        let model = (row.model.to_string(), row.confusion);
+        match methods.iter_mut().find(|m| m.name == row.method) {
+            Some(m) => m.models.push(model),
+            None => methods.push(MethodResults {
+                name: row.method.to_string(),
+                positive: row.positive.to_string(),
+                models: vec![model],
+            }),
+        }
+    }
+    methods
+}
+
+/// Classifies every cloud with `detector` and compares with its labels; calls
+/// `progress(clouds done, clouds)` after each.
+pub fn evaluate(
+    detector: &Detector,
+    clouds: &[TrainingCloud<'_>],
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<ModelResult>, NnError> {
+    let mut results = Vec::with_capacity(clouds.len());
+    for c in clouds {
+        let named = |source| NnError::Cloud {
+            name: c.name.to_string(),
+            source: Box::new(source),
+        };
+        let detection = detector.detect(c.cloud).map_err(named)?;
+        let matrix = ConfusionMatrix::from_labels(&Class::codes(c.labels), &detection.codes())
+            .map_err(named)?;
+        results.push(ModelResult {
+            name: c.name.to_string(),
+            matrix,
+        });
+        progress(results.len(), clouds.len());
+    }
+    Ok(results)
+}
+
+/// Markdown table of per-model scores of one method, with the median row.
+pub fn per_model_table(method: &MethodResults) -> String {
+    let mut out = String::from(
+        "| model | precision | recall | MCC | F1 | accuracy | IoU |\n|---|---|---|---|---|---|---|\n",
+    );
+    let row = |out: &mut String, name: &str, s: &Scores| {
+        let _ = writeln!(
+            out,
+            "| {name} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            s.precision, s.recall, s.mcc, s.f1, s.accuracy, s.iou
+        );
+    };
+    for (name, confusion) in &method.models {
+        row(&mut out, name, &confusion.scores());
+    }
+    if let Some(median) = method.median() {
+        row(&mut out, "**median**", &median);
+    }
+    out
+}
+
+/// Markdown table of the median scores of several methods, side by side (a method without
+/// models is left out).
+pub fn medians_table(methods: &[MethodResults]) -> String {
+    let mut out = String::from(
+        "| method | positive | models | precision | recall | MCC | F1 | accuracy | IoU |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
+    );
+    for m in methods {
+        if let Some(s) = m.median() {
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
+                m.name,
+                m.positive,
+                m.models.len(),
+                s.precision,
+                s.recall,
+                s.mcc,
+                s.f1,
+                s.accuracy,
+                s.iou
+            );
+        }
+    }
+    out
+}
+
+/// The 3-class confusion summed over `results`.
+pub fn pooled(results: &[ModelResult]) -> ConfusionMatrix {
+    let mut total = ConfusionMatrix::default();
+    for r in results {
+        total.add(&r.matrix);
+    }
+    total
+}
+
+/// Markdown table of the 3-class confusion summed over `results` (rows truth).
+pub fn confusion_table(results: &[ModelResult]) -> String {
+    let total = pooled(results);
+    let mut out =
+        String::from("| truth \\ predicted | non-edge | sharp | boundary |\n|---|---|---|---|\n");
+    for class in Class::ALL {
+        let [non_edge, sharp, boundary] = total.counts[class as usize];
+        let _ = writeln!(
+            out,
+            "| {} | {non_edge} | {sharp} | {boundary} |",
+            class.name()
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn confusion(tp: u64, fp: u64, tn: u64, fn_: u64) -> BinaryConfusion {
+        BinaryConfusion { tp, fp, tn, fn_ }
+    }
+
+    fn result(name: &str, counts: [[u64; 3]; 3]) -> ModelResult {
+        ModelResult {
+            name: name.into(),
+            matrix: ConfusionMatrix { counts },
+        }
+    }
+
+    #[test]
+    fn per_model_rows_and_the_median_row() {
+        // a: precision 1/2, recall 1, MCC 2 / sqrt(2 * 1 * 3 * 2) = 0.5774, F1 2/3, accuracy
+        // 3/4, IoU 1/2. b: precision 1, recall 1/4, MCC 5 / sqrt(1 * 4 * 5 * 8) = 0.3953, F1
+        // 2/5, accuracy 6/9, IoU 1/4. The median of two is their mean, score by score.
+        let method = MethodResults {
+            name: "m".into(),
+            positive: "sharp".into(),
+            models: vec![
+                ("a".into(), confusion(1, 1, 2, 0)),
+                ("b".into(), confusion(1, 0, 5, 3)),
+            ],
+        };
+        let table = per_model_table(&method);
+        let rows: Vec<&str> = table.lines().skip(2).collect();
+        assert_eq!(
+            rows,
+            [
+                "| a | 0.500 | 1.000 | 0.577 | 0.667 | 0.750 | 0.500 |",
+                "| b | 1.000 | 0.250 | 0.395 | 0.400 | 0.667 | 0.250 |",
+                "| **median** | 0.750 | 0.625 | 0.486 | 0.533 | 0.708 | 0.375 |",
+            ]
+        );
+    }
+
+    #[test]
+    fn medians_side_by_side_without_empty_methods() {
+        let ours = MethodResults::of(
+            "ours",
+            &[result("a", [[2, 1, 0], [0, 1, 0], [0, 0, 0]])],
+            Class::Sharp,
+        );
+        assert_eq!(ours.models, [("a".to_string(), confusion(1, 1, 2, 0))]);
+        let empty = MethodResults {
+            name: "none".into(),
+            positive: "sharp".into(),
+            models: vec![],
+        };
+        let table = medians_table(&[ours, empty]);
+        assert_eq!(table.lines().count(), 3, "{table}");
+        assert!(
+            table.ends_with(
+                "| ours | sharp | 1 | 0.500 | 1.000 | 0.577 | 0.667 | 0.750 | 0.500 |\n"
+            )
+        );
+    }
+
+    #[test]
+    fn pooled_confusion_sums_the_models() {
+        let results = [
+            result("a", [[5, 1, 0], [2, 3, 0], [0, 0, 1]]),
+            result("b", [[1, 0, 2], [0, 4, 0], [1, 0, 0]]),
+        ];
+        assert_eq!(pooled(&results).counts, [[6, 1, 2], [2, 7, 0], [1, 0, 1]]);
+        let table = confusion_table(&results);
+        let rows: Vec<&str> = table.lines().skip(2).collect();
+        assert_eq!(
+            rows,
+            [
+                "| non-edge | 6 | 1 | 2 |",
+                "| sharp | 2 | 7 | 0 |",
+                "| boundary | 1 | 0 | 1 |"
+            ]
+        );
+    }
+
+    #[test]
+    fn published_rows_grouped_by_method_on_the_given_models() {
+        let row = |method, model, tp| Published {
+            method,
+            positive: "sharp+smooth",
+            model,
+            confusion: confusion(tp, 0, 0, 0),
+        };
+        let rows = [
+            row("X", "a", 1),
+            row("Y", "a", 2),
+            row("X", "c", 3),
+            row("X", "b", 4),
+        ];
+        let methods = peer_methods(rows, &["a".to_string(), "b".to_string()]);
+        let got: Vec<(&str, Vec<(&str, u64)>)> = (methods.iter())
+            .map(|m| {
+                (
+                    m.name.as_str(),
+                    m.models.iter().map(|(n, c)| (n.as_str(), c.tp)).collect(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [("X", vec![("a", 1), ("b", 4)]), ("Y", vec![("a", 2)])]
+        );
+        assert_eq!(methods[0].positive, "sharp+smooth");
+    }
+}
