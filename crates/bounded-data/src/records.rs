@@ -246,13 +246,14 @@ pub(crate) fn write_text_rows(
     Ok(())
 }
 
-/// Writes fixed-size records (x, y, z, then each property) in blocks.
+/// Writes fixed-size records (x, y, z as `position`, a float type, then each property) in
+/// blocks.
 pub(crate) fn write_records(
     out: &mut impl Write,
     view: &TableView<'_>,
+    position: ScalarType,
     endian: Endian,
 ) -> std::io::Result<()> {
-    let position = view.position_type.float_type();
     let p_size = position.size();
     let stride = 3 * p_size
         + view

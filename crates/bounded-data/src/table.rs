@@ -327,7 +327,10 @@ fn push_parsed<T: Scalar>(v: &mut Vec<T>, token: &str, ty: ScalarType) -> Result
                 v.push(T::from_f64(f));
                 Ok(())
             }
-            _ => Err(format!("{} is not a valid {ty:?} value", crate::error::quoted(token))),
+            _ => Err(format!(
+                "{} is not a valid {ty:?} value",
+                crate::error::quoted(token)
+            )),
         },
     }
 }
@@ -393,6 +396,9 @@ pub struct PointTable {
     /// them back (`f64` coordinates, or LAS integers finer than `f32` resolves): the
     /// writers use them, so an output never moves a point. `None` for new clouds.
     pub exact_positions: Option<ExactPositions>,
+    /// The header records of a LAS input (CRS, other VLRs, Extra Bytes descriptors), which a
+    /// LAS output carries over; `None` for other inputs.
+    pub las_header: Option<crate::las::InputHeader>,
 }
 
 /// Input positions kept beside the cloud, in the input's own form: LAS integers take half
@@ -471,6 +477,7 @@ impl PointTable {
             cloud,
             properties: Vec::new(),
             exact_positions: None,
+            las_header: None,
         }
     }
 
@@ -515,6 +522,7 @@ impl PointTable {
             position_type: self.position_type,
             properties: self.properties.iter().collect(),
             exact_positions: self.exact_positions.as_ref(),
+            las_header: self.las_header.as_ref(),
         }
     }
 }
@@ -533,6 +541,8 @@ pub struct TableView<'a> {
     pub properties: Vec<&'a Property>,
     /// The input's exact positions, if the table keeps them (see [`PointTable`]).
     pub exact_positions: Option<&'a ExactPositions>,
+    /// The LAS input's header records, for a LAS output (see [`PointTable`]).
+    pub las_header: Option<&'a crate::las::InputHeader>,
 }
 
 impl TableView<'_> {
@@ -638,7 +648,10 @@ pub(crate) fn check_names<'a>(
         if coordinate || !seen.insert(name) {
             return Err(crate::DataError::malformed(
                 path,
-                format!("the property name {} appears twice", crate::error::quoted(name)),
+                format!(
+                    "the property name {} appears twice",
+                    crate::error::quoted(name)
+                ),
             ));
         }
     }
@@ -678,6 +691,7 @@ pub fn from_properties(
             position_type: PositionType::F32,
             properties,
             exact_positions: None,
+            las_header: None,
         });
     }
     // A typed fast path for doubles: no per-value dispatch in the hot loops.
@@ -693,6 +707,7 @@ pub fn from_properties(
         position_type: PositionType::F64,
         properties,
         exact_positions,
+        las_header: None,
     })
 }
 

@@ -6,8 +6,8 @@
 
 use super::{load_set, peer_methods, rate, training_clouds};
 use crate::cli::BenchArgs;
-use crate::progress::FitBars;
 use crate::pipeline;
+use crate::progress::FitBars;
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_data::peers;

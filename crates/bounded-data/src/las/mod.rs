@@ -26,8 +26,14 @@
 //! crate prefers a non-zero legacy count). A legacy count only is read as the count.
 //!
 //! Writing produces LAS 1.4 with point format 6, 7 (with colour) or 8 (with NIR), so that
-//! classification codes above 31 fit. A `class` property (BoundED classes) goes to the
-//! Classification field with these codes:
+//! classification codes above 31 fit. A property named like a field of the format fills it
+//! (`classification`, `intensity`, `gps_time`, `red`, ...; a legacy `scan_angle_rank` becomes
+//! `scan_angle`); every other property (for example `p_nonedge`, `p_sharp`, `p_boundary`) is
+//! written as Extra Bytes with an Extra Bytes VLR (user `LASF_Spec`, record 4), which PDAL,
+//! laspy and CloudCompare read as named dimensions. 8-bit colours are scaled to LAS's 16-bit
+//! range (x 257). Annotated outputs put the class in the Classification field, with these
+//! codes by default, or in an Extra Bytes field `class` (see
+//! [`ClassTarget`](crate::annotate::ClassTarget)):
 //!
 //! | BoundED class | LAS Classification |
 //! |---|---|
@@ -35,14 +41,10 @@
 //! | sharp edge (1) | 64, first user-definable code |
 //! | boundary (2) | 65, user-definable |
 //!
-//! and an input `classification` is then kept as the extra-bytes property
-//! `input_classification`. Every property that is not a LAS field (for example `p_nonedge`,
-//! `p_sharp`, `p_boundary`) is written as Extra Bytes with an Extra Bytes VLR (user
-//! `LASF_Spec`, record 4), which PDAL and CloudCompare read as named dimensions. 8-bit
-//! colours are scaled to LAS's 16-bit range (x 257). Coordinates of a LAS input keep its
-//! scale and offset; other clouds get their bounding-box centre as offset and a power-of-ten
-//! scale fine enough for the cloud's `f32` precision.
+//! Coordinates of a LAS input keep its scale and offset; other clouds get their bounding-box
+//! centre as offset and a power-of-ten scale fine enough for the cloud's `f32` precision.
 
+mod header;
 mod layout;
 mod read;
 #[cfg(test)]
@@ -52,6 +54,7 @@ mod write;
 use crate::DataError;
 use std::path::Path;
 
+pub use header::InputHeader;
 pub use read::read_from;
 pub use write::write_to;
 

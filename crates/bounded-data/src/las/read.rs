@@ -1,5 +1,6 @@
 //! Reading: the header through the `las` crate, the records in blocks decoded in parallel.
 
+use super::header::InputHeader;
 use super::las_error;
 use super::layout::*;
 use crate::DataError;
@@ -61,7 +62,11 @@ pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     } else {
         read_las(input, blocks, &slots, path)?
     };
-    into_table(header.transforms(), names, &slots, decoded, path)
+    let mut table = into_table(header.transforms(), names, &slots, decoded, path)?;
+    let input = InputHeader::of(&header).map_err(|e| las_error(path, e))?;
+    apply_scaling(&mut table.properties, &input.descriptors);
+    table.las_header = Some(input);
+    Ok(table)
 }
 
 /// A LAS file read with its legacy point count (the `u32` at byte 107) as 0 when `zero`, so
@@ -194,7 +199,10 @@ fn check_chunk_table(
 /// The 8 bytes at `at`, if the file holds them.
 fn word_at(input: &mut (impl Read + Seek), at: SeekFrom) -> Option<[u8; 8]> {
     let mut word = [0u8; 8];
-    input.seek(at).and_then(|_| input.read_exact(&mut word)).ok()?;
+    input
+        .seek(at)
+        .and_then(|_| input.read_exact(&mut word))
+        .ok()?;
     Some(word)
 }
 
@@ -419,6 +427,7 @@ fn into_table(
         },
         properties,
         exact_positions,
+        las_header: None,
     })
 }
 
