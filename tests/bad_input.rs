@@ -119,7 +119,7 @@ fn nan_coordinate() {
     assert!(err.contains("left out 1 point with a NaN"), "{err}");
     let table = bounded_data::format::read(&output).unwrap();
     assert_eq!(table.len(), 500);
-    assert!(table.property("class").is_some());
+    assert!(bounded_data::labels::class_column(&table).is_some());
 }
 
 #[test]

@@ -64,10 +64,11 @@ fn detect(cloud: &Path, model: &Path, extra: &[&str], out: &Path) -> Output {
     bounded_paths(&args)
 }
 
-/// Asserts that the `p_sharp` column of the cloud at `path` is `expected`'s to 1e-6.
+/// Asserts that the `p_sharp` column of the PLY cloud at `path` (`scalar_p_sharp`, named for
+/// CloudCompare) is `expected`'s to 1e-6.
 fn assert_p_sharp(path: &Path, expected: &[[f32; 3]]) {
     let table = bounded_data::format::read(path).unwrap();
-    let p_sharp = table.property("p_sharp").expect("p_sharp");
+    let p_sharp = table.property("scalar_p_sharp").expect("p_sharp");
     for (i, p) in expected.iter().enumerate() {
         let d = (p_sharp.get_f64(i) - f64::from(p[1])).abs();
         assert!(d < 1e-6, "{}: point {i} off by {d}", path.display());

@@ -3,7 +3,6 @@
 //! A thin binary: it parses arguments and wires the library crates together
 //! (bounded-data for files, bounded-features for the statistics, bounded-nn for the classifier).
 
-mod atomic;
 mod cli;
 mod commands;
 mod pipeline;
@@ -12,6 +11,7 @@ mod progress;
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {
+    remove_temporaries_on_signals();
     let args = cli::Cli::parse();
     if let Some(threads) = args.threads {
         // Only fails when a pool already exists, which cannot happen this early.
@@ -26,6 +26,25 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// On SIGINT or SIGTERM: removes the temporary files of the outputs being written (the
+/// targets stay as they were) and exits with 128 + the signal number (130 / 143), as shells
+/// report a process ended by it. SIGKILL cannot be caught: its temporary files stay behind
+/// (`bounded_geom::atomic::stale_temporaries` finds them).
+fn remove_temporaries_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    // Without a handler (it cannot fail but for a bad signal number) the signal still ends
+    // the process, only without the clean-up.
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            bounded_geom::atomic::remove_temporaries();
+            std::process::exit(128 + signal);
+        }
+    });
 }
 
 /// The error and its causes on one line, outermost first; a cause whose text an outer

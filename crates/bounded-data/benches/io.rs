@@ -54,7 +54,7 @@ fn io(c: &mut Criterion) {
             )
         });
         // Replacing an existing file (an exchange, then deleting the old one: see
-        // `write_atomic`), as when `detect` reruns with the same output.
+        // `bounded_geom::atomic`), as when `detect` reruns with the same output.
         group.bench_function(format!("replace_{ext}"), |b| b.iter(write));
         group.bench_function(format!("read_{ext}"), |b| {
             b.iter(|| read(&path).expect("read").len())

@@ -154,7 +154,9 @@ fn read_obj(path: &Path) -> Result<ObjMesh, DataError> {
                         .parse::<f64>()
                         .ok()
                         .filter(|x| x.is_finite())
-                        .ok_or_else(|| bad(format!("bad coordinate {token:?}")))?;
+                        .ok_or_else(|| {
+                            bad(format!("bad coordinate {}", crate::error::quoted(token)))
+                        })?;
                 }
                 vertices.push(p);
             }
@@ -195,7 +197,7 @@ fn face_index(token: &str, seen: usize) -> Result<u32, String> {
     let first = token.split('/').next().unwrap_or(token);
     let i: i64 = first
         .parse()
-        .map_err(|_| format!("bad face vertex {token:?}"))?;
+        .map_err(|_| format!("bad face vertex {}", crate::error::quoted(token)))?;
     let index = match i {
         0 => return Err("face vertex index 0 (OBJ indices start at 1)".into()),
         i if i > 0 => i - 1,
@@ -333,7 +335,10 @@ impl CurveParser<'_> {
                         other => {
                             return Err(self.error(
                                 line.number,
-                                format!("`sharp` must be true or false, got {other:?}"),
+                                format!(
+                                    "`sharp` must be true or false, got {}",
+                                    crate::error::quoted(other)
+                                ),
                             ));
                         }
                     };
@@ -347,7 +352,10 @@ impl CurveParser<'_> {
                             .ok_or_else(|| {
                                 self.error(
                                     line.number,
-                                    format!("expected a list `[...]`, got {value:?}"),
+                                    format!(
+                                        "expected a list `[...]`, got {}",
+                                        crate::error::quoted(value)
+                                    ),
                                 )
                             })?;
                         for token in list.split(',').map(str::trim).filter(|t| !t.is_empty()) {
@@ -373,9 +381,12 @@ impl CurveParser<'_> {
     }
 
     fn index(&self, token: &str, number: usize) -> Result<usize, DataError> {
-        token
-            .parse()
-            .map_err(|_| self.error(number, format!("bad vertex index {token:?}")))
+        token.parse().map_err(|_| {
+            self.error(
+                number,
+                format!("bad vertex index {}", crate::error::quoted(token)),
+            )
+        })
     }
 }
 
@@ -477,7 +488,7 @@ surfaces:
             (
                 OPEN_BOX.replace("f 4 1 9", "f 4 x 9"),
                 ok_yaml,
-                "line 16: bad face vertex \"x\"",
+                "line 16: bad face vertex 'x'",
             ),
             (
                 OPEN_BOX.replace("f 4 1 9", "f 4 0 9"),
@@ -497,7 +508,7 @@ surfaces:
             (
                 OPEN_BOX.replace("v 1 1 1", "v 1 nan 1"),
                 ok_yaml,
-                "line 8: bad coordinate \"nan\"",
+                "line 8: bad coordinate 'nan'",
             ),
             (
                 OPEN_BOX.replace("v 1 1 1", "v 1 1"),

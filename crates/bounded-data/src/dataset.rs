@@ -96,7 +96,10 @@ impl Manifest {
                 malformed(
                     path,
                     n + 1,
-                    &format!("unknown role {role:?} (train, validation or evaluation)"),
+                    &format!(
+                        "unknown role {} (train, validation or evaluation)",
+                        crate::error::quoted(role)
+                    ),
                 )
             })?;
             entries.push((base.join(file), role));
@@ -367,7 +370,7 @@ mod tests {
         let path = dir.path().join("manifest.txt");
         std::fs::write(&path, "# roles\ntrain a.ply\ntest b.ply\n").unwrap();
         let e = Manifest::read(&path).unwrap_err().to_string();
-        assert!(e.contains("line 3: unknown role \"test\""), "{e}");
+        assert!(e.contains("line 3: unknown role 'test'"), "{e}");
         std::fs::write(&path, "train\n").unwrap();
         let e = Manifest::read(&path).unwrap_err().to_string();
         assert!(e.contains("line 1: expected `<role> <path>`"), "{e}");

@@ -4,16 +4,8 @@
 //! place (an atomic rename or exchange) only once complete, so an interrupted or failed
 //! write never leaves a partial file.
 //!
-//! Annotated outputs add these properties to every input property (input properties of the
-//! same names are replaced, not duplicated):
-//!
-//! | property | type | meaning |
-//! |---|---|---|
-//! | `class` | uchar | 0 non-edge, 1 sharp edge, 2 boundary |
-//! | `p_nonedge`, `p_sharp`, `p_boundary` | float | class probabilities |
-//! | `red`, `green`, `blue` | uchar | sharp (255,0,0), boundary (0,255,0), non-edge (160,160,160) |
-//!
-//! LAS stores `class` in the Classification field instead (see [`crate::las`]).
+//! Annotated outputs ([`write_annotated`]) add the detection results to every input
+//! property: see [`crate::annotate`].
 //!
 //! ```
 //! use bounded_data::LabelledCloud;
@@ -34,10 +26,13 @@
 use crate::table::{Column, PointTable, PositionType, Property, TableView};
 use crate::{DataError, LabelledCloud};
 use bounded_geom::Class;
-use rayon::prelude::*;
 use std::fs::File;
-use std::io::{BufReader, BufWriter};
+use std::io::{BufReader, BufWriter, Cursor, Read, Seek, Write};
 use std::path::Path;
+
+pub use crate::annotate::{
+    drop_annotated, write_annotated, write_annotated_to, write_annotated_with,
+};
 
 /// A supported point-cloud file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +57,9 @@ pub enum Format {
     /// intensity and colours in the standard fields, the other properties as attributes of
     /// a `bounded` extension.
     E57,
+    /// NumPy (`.npy`), read only: a 2-D little-endian `float32` or `float64` array, one point
+    /// per row (C or Fortran order), x, y, z then properties `column_4`, ...
+    Npy,
 }
 
 impl Format {
@@ -79,6 +77,7 @@ impl Format {
             Some("laz") => Ok(Format::Las { compressed: true }),
             Some("csv") => Ok(Format::Xyz(crate::xyz::Separator::Comma)),
             Some("e57") => Ok(Format::E57),
+            Some("npy") => Ok(Format::Npy),
             _ => Err(DataError::UnknownFormat {
                 path: path.to_path_buf(),
             }),
@@ -101,19 +100,41 @@ pub fn read_finite(path: &Path) -> Result<(PointTable, usize), DataError> {
     read_with(path, true)
 }
 
+/// Reads a cloud in `format` from `input` (standard input, say), which is read to its end
+/// first, since the LAS and E57 readers seek; `name` names it in errors.
+pub fn read_from(input: impl Read, format: Format, name: &Path) -> Result<PointTable, DataError> {
+    let mut bytes = Vec::new();
+    BufReader::new(input)
+        .read_to_end(&mut bytes)
+        .map_err(|e| DataError::io(name, e))?;
+    read_source(Cursor::new(bytes), format, name, false).map(|(table, _)| table)
+}
+
 /// Reads `path`; with `drop_non_finite`, points with a non-finite coordinate are left out
-/// and counted. LAS coordinates are integers, always finite.
+/// and counted.
 fn read_with(path: &Path, drop_non_finite: bool) -> Result<(PointTable, usize), DataError> {
     let format = Format::from_path(path)?;
     let file = File::open(path).map_err(|e| DataError::io(path, e))?;
-    let buffered = |file| BufReader::with_capacity(1 << 20, file);
+    read_source(file, format, path, drop_non_finite)
+}
+
+/// Reads the cloud in `format` from `input`; `path` names it in errors. LAS coordinates are
+/// integers, always finite.
+fn read_source<R: Read + Seek + Send + Sync + 'static>(
+    input: R,
+    format: Format,
+    path: &Path,
+    drop_non_finite: bool,
+) -> Result<(PointTable, usize), DataError> {
+    let buffered = |input| BufReader::with_capacity(1 << 20, input);
     let mut properties = match format {
-        Format::Ply => crate::ply::read_properties(buffered(file), path)?,
-        Format::Pcd => crate::pcd::read_properties(buffered(file), path)?,
-        Format::Xyz(_) => crate::xyz::read_properties(buffered(file), path)?,
+        Format::Ply => crate::ply::read_properties(buffered(input), path)?,
+        Format::Pcd => crate::pcd::read_properties(buffered(input), path)?,
+        Format::Xyz(_) => crate::xyz::read_properties(buffered(input), path)?,
         // Unbuffered: the E57 reader seeks to every 1 KiB page, which empties a `BufReader`.
-        Format::E57 => crate::e57::read_properties(file, path)?,
-        Format::Las { .. } => return Ok((crate::las::read_from(buffered(file), path)?, 0)),
+        Format::E57 => crate::e57::read_properties(input, path)?,
+        Format::Npy => crate::npy::read_properties(buffered(input), path)?,
+        Format::Las { .. } => return Ok((crate::las::read_from(buffered(input), path)?, 0)),
     };
     let dropped = if drop_non_finite {
         crate::table::drop_non_finite(&mut properties)
@@ -131,67 +152,59 @@ pub fn write(path: &Path, table: &PointTable) -> Result<(), DataError> {
 /// Writes `view` to `path`, in the format named by its extension.
 pub fn write_view(path: &Path, view: &TableView<'_>) -> Result<(), DataError> {
     let format = Format::from_path(path)?;
-    write_atomic(path, |file| match format {
-        // Unbuffered: the E57 writer writes whole 1 KiB pages and seeks back to finish.
-        Format::E57 => crate::e57::write_to(file, view, path),
-        Format::Ply => {
-            crate::ply::write_to(file, view, crate::ply::Encoding::BinaryLittleEndian, path)
-        }
-        Format::Pcd => crate::pcd::write_to(file, view, path),
-        Format::Xyz(separator) => crate::xyz::write_to(file, view, separator, path),
-        Format::Las { compressed } => {
-            let file = file.try_clone().map_err(|e| DataError::io(path, e))?;
-            let out = BufWriter::with_capacity(1 << 20, file);
-            crate::las::write_to(out, view, compressed, path).map(drop)
-        }
+    bounded_geom::atomic::write_with(path, |file: &mut File| {
+        let file = file.try_clone().map_err(|e| DataError::io(path, e))?;
+        encode(file, view, format, path).map(drop)
     })
 }
 
-/// Writes `table` with the detection results: `class`, `p_nonedge`, `p_sharp`, `p_boundary`
-/// and a class colour per point (see the module documentation).
-///
-/// `classes` and `probabilities` must have one entry per point.
-pub fn write_annotated(
-    path: &Path,
-    table: &PointTable,
-    classes: &[Class],
-    probabilities: &[[f32; 3]],
+/// Writes `view` in `format` to `out` (standard output, say): encoded in memory first, since
+/// the LAS and E57 writers seek back; `name` names the output in errors.
+pub fn write_to(
+    mut out: impl Write,
+    view: &TableView<'_>,
+    format: Format,
+    name: &Path,
 ) -> Result<(), DataError> {
-    if classes.len() != table.len() || probabilities.len() != table.len() {
-        return Err(DataError::InvalidOutput {
-            path: path.to_path_buf(),
-            what: format!(
-                "{} classes and {} probabilities for {} points",
-                classes.len(),
-                probabilities.len(),
-                table.len()
-            ),
-        });
-    }
-    let added = annotation(classes, probabilities);
-    let mut view = table.view();
-    view.properties
-        .retain(|p| !ANNOTATION.contains(&p.name.as_str()));
-    view.properties.extend(&added);
-    write_view(path, &view)
+    let bytes = encode(Cursor::new(Vec::new()), view, format, name)?.into_inner();
+    out.write_all(&bytes)
+        .and_then(|()| out.flush())
+        .map_err(|e| DataError::io(name, e))
 }
 
-/// The properties [`write_annotated`] adds, replacing input properties of the same names.
-pub const ANNOTATION: [&str; 7] = [
-    "class",
-    "p_nonedge",
-    "p_sharp",
-    "p_boundary",
-    "red",
-    "green",
-    "blue",
-];
-
-/// Drops the properties of `table` that [`write_annotated`] would replace (see
-/// [`ANNOTATION`]), so that their memory is free while the cloud is labelled; the annotated
-/// output is the same.
-pub fn drop_annotated(table: &mut PointTable) {
-    (table.properties).retain(|p| !ANNOTATION.contains(&p.name.as_str()));
+/// Encodes `view` in `format` into `out` and returns it; `path` names the output in errors.
+fn encode<W: Read + Write + Seek + Send + Sync + 'static>(
+    mut out: W,
+    view: &TableView<'_>,
+    format: Format,
+    path: &Path,
+) -> Result<W, DataError> {
+    match format {
+        // Unbuffered: the E57 writer writes whole 1 KiB pages and seeks back to finish.
+        Format::E57 => crate::e57::write_to(&mut out, view, path)?,
+        Format::Ply => crate::ply::write_to(
+            &mut out,
+            view,
+            crate::ply::Encoding::BinaryLittleEndian,
+            path,
+        )?,
+        Format::Pcd => crate::pcd::write_to(&mut out, view, path)?,
+        Format::Xyz(separator) => crate::xyz::write_to(&mut out, view, separator, path)?,
+        Format::Las { compressed } => {
+            let buffered = BufWriter::with_capacity(1 << 20, out);
+            let buffered = crate::las::write_to(buffered, view, compressed, path)?;
+            out = (buffered.into_inner()).map_err(|e| DataError::io(path, e.into_error()))?;
+        }
+        Format::Npy => {
+            return Err(DataError::InvalidOutput {
+                path: path.to_path_buf(),
+                what:
+                    "npy is an input format; write .ply, .pcd, .xyz, .txt, .csv, .las, .laz or .e57"
+                        .into(),
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// Writes a ground-truth labelled cloud: positions and a `class` (uchar) property.
@@ -212,6 +225,7 @@ pub fn write_labelled(path: &Path, labelled: &LabelledCloud) -> Result<(), DataE
         position_type: PositionType::for_cloud(&labelled.cloud),
         properties: vec![&class],
         exact_positions: None,
+        las_header: None,
     };
     write_view(path, &view)
 }
@@ -230,93 +244,6 @@ fn class_property(classes: &[Class]) -> Property {
         "class",
         Column::U8(classes.iter().map(|&c| c as u8).collect()),
     )
-}
-
-/// The annotation columns, filled in one parallel pass: at 10M points they are 160 MB of
-/// fresh pages, whose faults and stores would otherwise be a fifth of a LAS write.
-fn annotation(classes: &[Class], probabilities: &[[f32; 3]]) -> Vec<Property> {
-    let n = classes.len();
-    let mut class = vec![0u8; n];
-    let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0f32; n]);
-    let mut rgb: [Vec<u8>; 3] = std::array::from_fn(|_| vec![0u8; n]);
-    let [p0, p1, p2] = &mut p;
-    let [r, g, b] = &mut rgb;
-    const CHUNK: usize = 1 << 14;
-    (
-        class.par_chunks_mut(CHUNK),
-        p0.par_chunks_mut(CHUNK),
-        p1.par_chunks_mut(CHUNK),
-        p2.par_chunks_mut(CHUNK),
-        (
-            r.par_chunks_mut(CHUNK),
-            g.par_chunks_mut(CHUNK),
-            b.par_chunks_mut(CHUNK),
-        ),
-        (classes.par_chunks(CHUNK), probabilities.par_chunks(CHUNK)),
-    )
-        .into_par_iter()
-        .for_each(|(class, p0, p1, p2, (r, g, b), (classes, probabilities))| {
-            for k in 0..classes.len() {
-                let [red, green, blue] = class_colour(classes[k]);
-                [class[k], r[k], g[k], b[k]] = [classes[k] as u8, red, green, blue];
-                [p0[k], p1[k], p2[k]] = probabilities[k];
-            }
-        });
-    let [p0, p1, p2] = p.map(Column::F32);
-    let [r, g, b] = rgb.map(Column::U8);
-    let columns = [Column::U8(class), p0, p1, p2, r, g, b];
-    (ANNOTATION.into_iter().zip(columns))
-        .map(|(name, values)| Property::new(name, values))
-        .collect()
-}
-
-/// Runs `write` on a temporary file next to `path`, then renames it to `path`; on any
-/// error the temporary file is removed and `path` is left untouched.
-pub(crate) fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&mut File) -> Result<(), DataError>,
-) -> Result<(), DataError> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".bounded-")
-        .suffix(".part")
-        .tempfile_in(dir)
-        .map_err(|e| DataError::io(path, e))?;
-    write(tmp.as_file_mut())?;
-    // Temp files are private (0600); the result should be an ordinary file.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o644))
-            .map_err(|e| DataError::io(path, e))?;
-    }
-    if !exchange(tmp.path(), path) {
-        tmp.persist(path)
-            .map_err(|e| DataError::io(path, e.error))?;
-    }
-    // After an exchange `tmp` names the previous file, which dropping it deletes.
-    Ok(())
-}
-
-/// Swaps the finished temporary file with an existing regular file at `path` (Linux
-/// `renameat2` with `RENAME_EXCHANGE`: atomic like a rename). Why not a plain rename: on
-/// ext4 a rename over an existing file starts the writeback of the new file inside the call
-/// (`auto_da_alloc`), which made replacing a large output take twice as long as writing it.
-/// Returns false, having changed nothing, when `path` is not an existing regular file or the
-/// filesystem cannot exchange; the caller then renames.
-#[cfg(target_os = "linux")]
-fn exchange(tmp: &Path, path: &Path) -> bool {
-    use rustix::fs::{CWD, RenameFlags, renameat_with};
-    std::fs::symlink_metadata(path).is_ok_and(|m| m.is_file())
-        && renameat_with(CWD, tmp, CWD, path, RenameFlags::EXCHANGE).is_ok()
-}
-
-#[cfg(not(target_os = "linux"))]
-fn exchange(_: &Path, _: &Path) -> bool {
-    false
 }
 
 #[cfg(test)]
@@ -361,102 +288,6 @@ mod tests {
             "{e}"
         );
         assert!(Format::from_path(Path::new("noext")).is_err());
-    }
-
-    #[test]
-    fn annotation_columns_hold_each_point_across_parallel_chunks() {
-        let n = 40_000;
-        let classes: Vec<Class> = (0..n).map(|i| Class::ALL[i * 7 % 3]).collect();
-        let probabilities: Vec<[f32; 3]> = (0..n).map(|i| [i as f32, 0.5, -(i as f32)]).collect();
-        let columns = annotation(&classes, &probabilities);
-        let value = |name: &str, i: usize| {
-            let p = columns.iter().find(|p| p.name == name).unwrap();
-            assert_eq!(p.values.len(), n, "{name}");
-            p.values.get_f64(i)
-        };
-        for i in [0, 1, 16_383, 16_384, 16_385, 32_768, n - 1] {
-            let colour = class_colour(classes[i]).map(f64::from);
-            assert_eq!(value("class", i), classes[i] as u8 as f64, "{i}");
-            assert_eq!(
-                [value("red", i), value("green", i), value("blue", i)],
-                colour
-            );
-            let p = ["p_nonedge", "p_sharp", "p_boundary"].map(|name| value(name, i) as f32);
-            assert_eq!(p, probabilities[i], "{i}");
-        }
-    }
-
-    #[test]
-    fn dropping_the_replaced_properties_first_writes_the_same_output() {
-        let dir = tempfile::tempdir().unwrap();
-        let classes = [Class::Sharp, Class::NonEdge, Class::Boundary];
-        let probabilities = [[0.1, 0.8, 0.1], [0.9, 0.05, 0.05], [0.2, 0.2, 0.6]];
-        let mut t = sample();
-        let before: Vec<String> = t.properties.iter().map(|p| p.name.clone()).collect();
-        let write = |t: &PointTable, name: &str| {
-            let path = dir.path().join(name);
-            write_annotated(&path, t, &classes, &probabilities).unwrap();
-            std::fs::read(path).unwrap()
-        };
-        let whole = write(&t, "whole.ply");
-        drop_annotated(&mut t);
-        let kept: Vec<&str> = t.properties.iter().map(|p| p.name.as_str()).collect();
-        let expected: Vec<&str> = before
-            .iter()
-            .map(String::as_str)
-            .filter(|n| !ANNOTATION.contains(n))
-            .collect();
-        assert!(kept.len() < before.len(), "{before:?}");
-        assert_eq!(kept, expected);
-        assert_eq!(write(&t, "dropped.ply"), whole);
-    }
-
-    #[test]
-    fn annotated_output_replaces_same_named_properties_in_every_format() {
-        let dir = tempfile::tempdir().unwrap();
-        let t = sample();
-        let classes = [Class::Sharp, Class::NonEdge, Class::Boundary];
-        let probabilities = [[0.1, 0.8, 0.1], [0.9, 0.05, 0.05], [0.2, 0.2, 0.6]];
-        for ext in ["ply", "pcd", "xyz", "txt", "csv", "las", "laz", "e57"] {
-            let path = dir.path().join(format!("out.{ext}"));
-            write_annotated(&path, &t, &classes, &probabilities).unwrap();
-            let back = read(&path).unwrap();
-            assert_eq!(back.len(), 3, "{ext}");
-            let names: Vec<&str> = back.properties.iter().map(|p| p.name.as_str()).collect();
-            let red = back.property("red").unwrap();
-            // LAS stores 16-bit colours.
-            let full = if ext.starts_with("la") {
-                65535.0
-            } else {
-                255.0
-            };
-            assert_eq!(
-                [0, 1, 2].map(|i| red.get_f64(i)),
-                [full, full * 160.0 / 255.0, 0.0],
-                "{ext}"
-            );
-            assert_eq!(names.iter().filter(|n| **n == "red").count(), 1, "{ext}");
-            assert_eq!(
-                back.property("intensity").unwrap().get_f64(1),
-                65535.0,
-                "{ext}"
-            );
-            let p_sharp = back.property("p_sharp").unwrap();
-            assert_eq!(p_sharp.get_f64(0) as f32, 0.8, "{ext}");
-            if ext.starts_with("la") {
-                let codes = back.property("classification").unwrap();
-                assert_eq!([0, 1, 2].map(|i| codes.get_f64(i)), [64.0, 1.0, 65.0]);
-                let original = back.property("input_classification");
-                assert_eq!(
-                    original, None,
-                    "class, not classification, was in the input"
-                );
-            } else {
-                let labels = crate::labels::from_table(back, Convention::ClassProperty, &path);
-                assert_eq!(labels.unwrap().labels, classes, "{ext}");
-            }
-        }
-        assert_eq!(entries(dir.path()).len(), 8, "no temporary files left");
     }
 
     /// Every position as the writers see it.

@@ -6,7 +6,7 @@
 //! |---|---|---|---|
 //! | [`Convention::Pcednet`] | (168,0,0), (255,0,0) | white | smooth edge (255,196,93) configurable, default non-edge |
 //! | [`Convention::Bazazian`] | red (255,0,0), yellow (255,255,0) | white | |
-//! | [`Convention::ClassProperty`] | `class`/`label` = 1 | 0 | 2 boundary |
+//! | [`Convention::ClassProperty`] | `class`/`scalar_class`/`label` = 1 | 0 | 2 boundary |
 //!
 //! Any other colour or value is an error naming the point, never a silent guess.
 
@@ -108,9 +108,12 @@ fn by_colour(
         .collect()
 }
 
-/// The column [`Convention::ClassProperty`] reads: `class`, else `label`.
+/// The column [`Convention::ClassProperty`] reads: `class`, else `scalar_class` (the name
+/// annotated PLY and text outputs give it for CloudCompare), else `label`.
 pub fn class_column(table: &PointTable) -> Option<&Column> {
-    table.property("class").or_else(|| table.property("label"))
+    ["class", "scalar_class", "label"]
+        .into_iter()
+        .find_map(|name| table.property(name))
 }
 
 fn by_class(table: &PointTable) -> Result<Vec<Class>, String> {

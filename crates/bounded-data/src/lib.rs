@@ -1,7 +1,8 @@
 //! Point-cloud formats, labelled datasets, pictures and the synthetic training-set generator
 //! for BoundED.
 //!
-//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, E57.
+//! Formats (chosen by file extension): PLY, PCD, XYZ/TXT/CSV, LAS/LAZ, E57, and NumPy `.npy`
+//! as input; annotated outputs (the detection results added to the input) in [`annotate`].
 //!
 //! The generator ([`synth`]) is the default cargo feature `generator`; a user of the formats
 //! alone builds without it (and its random-number crates) with `default-features = false`.
@@ -9,9 +10,11 @@
 mod e57;
 mod error;
 mod labelled;
+mod npy;
 mod records;
 
 pub mod abc;
+pub mod annotate;
 pub mod dataset;
 pub mod format;
 pub mod labels;

@@ -4,12 +4,17 @@
 //! fields of any PCL type (`I`/`U` of 1, 2, 4 bytes, `F` of 4 or 8 bytes). A field with
 //! `COUNT` n > 1 becomes n properties `name_0 .. name_{n-1}`; `_` padding fields are dropped;
 //! PCL's packed `rgb` / `rgba` field becomes `red`, `green`, `blue` (and `alpha`) so colours
-//! survive conversion to other formats. Writing produces `DATA binary` and packs
-//! `red`/`green`/`blue` back into `rgb`, which PCL and CloudCompare display.
+//! survive conversion to other formats. Writing produces `DATA binary` and packs 8-bit
+//! `red`/`green`/`blue` back into `rgb`, which PCL and CloudCompare display. Positions are
+//! written as `F 4` when every coordinate is a single float (PCL's `PointXYZ` tools load
+//! nothing else), else as `F 8`, which keeps every coordinate (UTM-sized or finely
+//! quantised clouds); annotated outputs write `class` as `F 4`, since PCL's filters
+//! (`pcl_passthrough_filter -field class`) read the field they filter on as a float.
 
 use crate::DataError;
+use crate::error::quoted;
 use crate::records::{read_line, read_records, read_text_rows, truncated};
-use crate::table::{Column, Endian, PointTable, Property, ScalarType, TableView};
+use crate::table::{Column, Endian, PointTable, PositionType, Property, ScalarType, TableView};
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
 
@@ -73,7 +78,10 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
         bytes += n as u64;
         let line = String::from_utf8_lossy(&buf);
         let bad = |what: &str| {
-            DataError::malformed(path, format!("header line {lines}: {what}: '{line}'"))
+            DataError::malformed(
+                path,
+                format!("header line {lines}: {what}: {}", quoted(&line)),
+            )
         };
         let number = |w: &str| w.parse::<usize>().map_err(|_| bad("not a count"));
         let mut words = line.split_ascii_whitespace();
@@ -118,13 +126,18 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
         let ty = pcd_type(kind, size).ok_or_else(|| {
             DataError::malformed(
                 path,
-                format!("field '{name}' has unsupported TYPE {kind} SIZE {size}"),
+                format!(
+                    "field {} has unsupported TYPE {} SIZE {}",
+                    quoted(&name),
+                    quoted(kind),
+                    quoted(size)
+                ),
             )
         })?;
         if count == 0 || count > 4096 {
             return Err(DataError::malformed(
                 path,
-                format!("field '{name}' has COUNT {count}"),
+                format!("field {} has COUNT {count}", quoted(&name)),
             ));
         }
         fields.push(Field { name, ty, count });
@@ -376,6 +389,18 @@ pub fn write_to(out: impl Write, view: &TableView<'_>, path: &Path) -> Result<()
     out.flush().map_err(|e| DataError::io(path, e))
 }
 
+/// `F32` when every position is a single float, as PCL's `PointXYZ` types and tools need
+/// (they find no `x` of another type), else `F64`, which loses nothing.
+fn position_type(view: &TableView<'_>) -> ScalarType {
+    use rayon::prelude::*;
+    let single = |i| view.position(i).iter().all(|&c| f64::from(c as f32) == c);
+    if view.position_type == PositionType::F32 || (0..view.len()).into_par_iter().all(single) {
+        ScalarType::F32
+    } else {
+        ScalarType::F64
+    }
+}
+
 /// `red`, `green`, `blue` byte channels packed into PCL's `rgb` float, if all three exist.
 fn pack_colours(view: &TableView<'_>) -> Option<Property> {
     let channel = |name: &str| {
@@ -392,7 +417,7 @@ fn pack_colours(view: &TableView<'_>) -> Option<Property> {
 }
 
 fn write_body(out: &mut impl Write, view: &TableView<'_>) -> std::io::Result<()> {
-    let position = view.position_type.float_type();
+    let position = position_type(view);
     let types: Vec<ScalarType> = [position; 3]
         .into_iter()
         .chain(view.properties.iter().map(|p| p.values.scalar_type()))
@@ -417,7 +442,7 @@ fn write_body(out: &mut impl Write, view: &TableView<'_>) -> std::io::Result<()>
     writeln!(out, "VIEWPOINT 0 0 0 1 0 0 0")?;
     writeln!(out, "POINTS {}", view.len())?;
     writeln!(out, "DATA binary")?;
-    crate::records::write_records(out, view, Endian::Little)
+    crate::records::write_records(out, view, position, Endian::Little)
 }
 
 #[cfg(test)]
@@ -469,6 +494,43 @@ mod tests {
     }
 
     #[test]
+    fn positions_are_single_floats_when_that_loses_nothing() {
+        let fields = |t: &PointTable| {
+            let mut bytes = Vec::new();
+            write_to(&mut bytes, &t.view(), Path::new("t.pcd")).unwrap();
+            let text = String::from_utf8_lossy(&bytes);
+            let line = |key: &str| {
+                text.lines()
+                    .find(|l| l.starts_with(key))
+                    .unwrap()
+                    .to_string()
+            };
+            let back = read_from(Cursor::new(bytes.clone()), Path::new("t.pcd")).unwrap();
+            let view = back.view();
+            let positions: Vec<[f64; 3]> = (0..back.len()).map(|i| view.position(i)).collect();
+            (line("SIZE"), positions)
+        };
+        // Doubles that are single floats (halves, quarters), then one that is not.
+        let text = |t: &str| {
+            crate::xyz::read_from(Cursor::new(t.to_string()), Path::new("t.xyz")).unwrap()
+        };
+        let t = text("0.5 -1.25 2\n1.5 3 -4\n");
+        assert_eq!(t.position_type, crate::table::PositionType::F64);
+        assert_eq!(
+            fields(&t),
+            (
+                "SIZE 4 4 4".into(),
+                vec![[0.5, -1.25, 2.0], [1.5, 3.0, -4.0]]
+            )
+        );
+        let t = text("0.1 0 0\n1 0 0\n");
+        assert_eq!(
+            fields(&t),
+            ("SIZE 8 8 8".into(), vec![[0.1, 0.0, 0.0], [1.0, 0.0, 0.0]])
+        );
+    }
+
+    #[test]
     fn ascii_and_compressed_with_counts_and_padding() {
         let ascii = "# c\nVERSION .7\nFIELDS x y z n _\nSIZE 4 4 8 2 1\nTYPE F F F I U\n\
             COUNT 1 1 1 2 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3 -4 5 0\n\r\n6 7 8 9 10 0\n";
@@ -515,6 +577,10 @@ mod tests {
             (
                 format!("{head}DATA binary\n\0\0\0\0"),
                 "ends within point 0 of 2",
+            ),
+            (
+                format!("{head}DATA binary\n{}", "\0".repeat(20)),
+                "ends within point 1 of 2 (at byte offset 93)",
             ),
             (
                 format!("{head}DATA binary_compressed\n\x05\0\0\0\x18\0\0\0\x01"),

@@ -6,10 +6,12 @@
 //! decoded in blocks of records, column by column, so throughput is limited by memory
 //! bandwidth rather than per-value dispatch; ascii data is streamed line by line.
 //!
-//! Writing uses the classic type names (`uchar`, `float`, ...) that CloudCompare and MeshLab
-//! read.
+//! Writing uses the sized type names (`uint8`, `uint16`, `float32`, ...) of the PLY
+//! specification, which CloudCompare, MeshLab, Open3D, meshio and plyfile all read (Open3D
+//! skips and meshio refuses the classic `ushort` and `short`).
 
 use crate::DataError;
+use crate::error::quoted;
 use crate::table::{Column, Endian, PointTable, Property, ScalarType, TableView};
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
@@ -80,16 +82,18 @@ fn scalar_type(name: &str) -> Option<ScalarType> {
     })
 }
 
+/// The sized type name, which every reader takes: Open3D and meshio skip or refuse the
+/// classic `ushort` and `short`.
 fn type_name(ty: ScalarType) -> &'static str {
     match ty {
-        ScalarType::I8 => "char",
-        ScalarType::U8 => "uchar",
-        ScalarType::I16 => "short",
-        ScalarType::U16 => "ushort",
-        ScalarType::I32 => "int",
-        ScalarType::U32 => "uint",
-        ScalarType::F32 => "float",
-        ScalarType::F64 => "double",
+        ScalarType::I8 => "int8",
+        ScalarType::U8 => "uint8",
+        ScalarType::I16 => "int16",
+        ScalarType::U16 => "uint16",
+        ScalarType::I32 => "int32",
+        ScalarType::U32 => "uint32",
+        ScalarType::F32 => "float32",
+        ScalarType::F64 => "float64",
     }
 }
 
@@ -111,7 +115,7 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
         let bad = |what: &str| {
             DataError::malformed(
                 path,
-                format!("header line {}: {what}: '{line}'", header.lines),
+                format!("header line {}: {what}: {}", header.lines, quoted(&line)),
             )
         };
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
@@ -210,7 +214,10 @@ pub(crate) fn read_properties(
             Kind::List { .. } => {
                 return Err(DataError::malformed(
                     path,
-                    format!("vertex property '{name}' is a list; vertex lists are not supported"),
+                    format!(
+                        "vertex property {} is a list; vertex lists are not supported",
+                        quoted(name)
+                    ),
                 ));
             }
         }
@@ -288,8 +295,9 @@ fn skip_ascii_items(
                     Err(DataError::malformed(
                         path,
                         format!(
-                            "the file ends at line {line} inside element '{}' (item {i} of {})",
-                            element.name, element.count
+                            "the file ends at line {line} inside element {} (item {i} of {})",
+                            quoted(&element.name),
+                            element.count
                         ),
                     ))
                 } else {
@@ -318,8 +326,8 @@ fn skip_binary_items(
         .sum();
     let ends = |at: u64| {
         format!(
-            "the data ends inside element '{}' (byte offset {at})",
-            element.name
+            "the data ends inside element {} (byte offset {at})",
+            quoted(&element.name)
         )
     };
     if let Some(stride) = fixed {
@@ -403,7 +411,7 @@ fn write_body(
     writeln!(out, "end_header")?;
     match encoding.endian() {
         None => crate::records::write_text_rows(out, view, ' '),
-        Some(endian) => crate::records::write_records(out, view, endian),
+        Some(endian) => crate::records::write_records(out, view, position, endian),
     }
 }
 
@@ -441,6 +449,30 @@ mod tests {
         ] {
             assert_eq!(round_trip(&t, encoding), t, "{encoding:?}");
         }
+    }
+
+    #[test]
+    fn headers_use_the_sized_type_names() {
+        let mut bytes = Vec::new();
+        let t = sample();
+        write_to(
+            &mut bytes,
+            &t.view(),
+            Encoding::BinaryLittleEndian,
+            Path::new("t.ply"),
+        )
+        .unwrap();
+        let text = String::from_utf8_lossy(&bytes);
+        let header = text.split("end_header").next().unwrap();
+        let types: Vec<&str> = (header.lines())
+            .filter_map(|l| l.strip_prefix("property ")?.split(' ').next())
+            .collect();
+        assert_eq!(
+            types,
+            [
+                "float32", "float32", "float32", "uint16", "int8", "float64", "float32"
+            ]
+        );
     }
 
     #[test]
@@ -545,7 +577,18 @@ mod tests {
             ),
             (
                 format!("{}\0\0\0\0", HEAD.replace("ascii", "binary_little_endian")).into_bytes(),
-                "ends within point 0 of 2 (block at byte offset 115)",
+                "ends within point 0 of 2 (at byte offset 119)",
+            ),
+            (
+                // 5 whole points of 12 bytes and 4 bytes of the sixth.
+                [
+                    HEAD.replace("ascii", "binary_little_endian")
+                        .replace("vertex 2", "vertex 10")
+                        .into_bytes(),
+                    vec![0; 64],
+                ]
+                .concat(),
+                "ends within point 5 of 10 (at byte offset 180)",
             ),
         ];
         for (bytes, expected) in cases {

@@ -186,23 +186,37 @@ pub(crate) fn read_records(
     while done < count {
         let n = (count - done).min(block_len);
         let block = &mut buf[..n * stride];
-        input.read_exact(block).map_err(|e| {
-            truncated(
+        let got = read_full(input, block).map_err(|e| DataError::io(path, e))?;
+        if got < block.len() {
+            return Err(DataError::malformed(
                 path,
                 format!(
-                    "the point data ends within point {} of {count} (block at byte offset {})",
-                    done,
-                    offset + (done * stride) as u64
+                    "the point data ends within point {} of {count} (at byte offset {})",
+                    done + got / stride,
+                    offset + (done * stride + got) as u64
                 ),
-                e,
-            )
-        })?;
+            ));
+        }
         for (column, &at) in columns.iter_mut().zip(&offsets) {
             column.decode_strided(block, stride, at, endian);
         }
         done += n;
     }
     Ok(())
+}
+
+/// Fills `buf` from `input` until it is full or the input ends; the number of bytes read.
+fn read_full(input: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match input.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
 }
 
 /// Writes one text row per point: positions then properties, separated by `separator`.
@@ -232,13 +246,14 @@ pub(crate) fn write_text_rows(
     Ok(())
 }
 
-/// Writes fixed-size records (x, y, z, then each property) in blocks.
+/// Writes fixed-size records (x, y, z as `position`, a float type, then each property) in
+/// blocks.
 pub(crate) fn write_records(
     out: &mut impl Write,
     view: &TableView<'_>,
+    position: ScalarType,
     endian: Endian,
 ) -> std::io::Result<()> {
-    let position = view.position_type.float_type();
     let p_size = position.size();
     let stride = 3 * p_size
         + view

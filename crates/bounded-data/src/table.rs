@@ -85,12 +85,14 @@ pub enum PositionType {
 
 impl PositionType {
     /// The type to use for a new cloud: `F32` unless an absolute coordinate is so large
-    /// (beyond 100 km) that `f32` would lose centimetres.
+    /// (beyond 100 km) that `f32` would lose centimetres, or the cloud's extent is extreme
+    /// (offsets stored scaled, see [`PointCloud`]).
     pub fn for_cloud(cloud: &PointCloud) -> Self {
         let far = cloud
             .origin()
             .iter()
-            .any(|o| o.abs() > 1e5 || !o.is_finite());
+            .any(|o| o.abs() > 1e5 || !o.is_finite())
+            || cloud.scale() != 1.0;
         if far {
             PositionType::F64
         } else {
@@ -325,7 +327,10 @@ fn push_parsed<T: Scalar>(v: &mut Vec<T>, token: &str, ty: ScalarType) -> Result
                 v.push(T::from_f64(f));
                 Ok(())
             }
-            _ => Err(format!("'{token}' is not a valid {ty:?} value")),
+            _ => Err(format!(
+                "{} is not a valid {ty:?} value",
+                crate::error::quoted(token)
+            )),
         },
     }
 }
@@ -391,6 +396,9 @@ pub struct PointTable {
     /// them back (`f64` coordinates, or LAS integers finer than `f32` resolves): the
     /// writers use them, so an output never moves a point. `None` for new clouds.
     pub exact_positions: Option<ExactPositions>,
+    /// The header records of a LAS input (CRS, other VLRs, Extra Bytes descriptors), which a
+    /// LAS output carries over; `None` for other inputs.
+    pub las_header: Option<crate::las::InputHeader>,
 }
 
 /// Input positions kept beside the cloud, in the input's own form: LAS integers take half
@@ -469,6 +477,7 @@ impl PointTable {
             cloud,
             properties: Vec::new(),
             exact_positions: None,
+            las_header: None,
         }
     }
 
@@ -513,6 +522,7 @@ impl PointTable {
             position_type: self.position_type,
             properties: self.properties.iter().collect(),
             exact_positions: self.exact_positions.as_ref(),
+            las_header: self.las_header.as_ref(),
         }
     }
 }
@@ -531,6 +541,8 @@ pub struct TableView<'a> {
     pub properties: Vec<&'a Property>,
     /// The input's exact positions, if the table keeps them (see [`PointTable`]).
     pub exact_positions: Option<&'a ExactPositions>,
+    /// The LAS input's header records, for a LAS output (see [`PointTable`]).
+    pub las_header: Option<&'a crate::las::InputHeader>,
 }
 
 impl TableView<'_> {
@@ -557,20 +569,23 @@ impl TableView<'_> {
         for p in &self.properties {
             if p.values.len() != self.len() {
                 return invalid(format!(
-                    "property '{}' has {} values for {} points",
-                    p.name,
+                    "property {} has {} values for {} points",
+                    crate::error::quoted(&p.name),
                     p.values.len(),
                     self.len()
                 ));
             }
             if p.name.is_empty() || p.name.contains(|c: char| c.is_whitespace() || c == ',') {
                 return invalid(format!(
-                    "property name '{}' is empty or has a space or comma",
-                    p.name
+                    "property name {} is empty or has a space or comma",
+                    crate::error::quoted(&p.name)
                 ));
             }
             if matches!(p.name.as_str(), "x" | "y" | "z") || !seen.insert(p.name.as_str()) {
-                return invalid(format!("property name '{}' is used twice", p.name));
+                return invalid(format!(
+                    "property name {} is used twice",
+                    crate::error::quoted(&p.name)
+                ));
             }
         }
         Ok(())
@@ -620,6 +635,29 @@ pub(crate) fn drop_non_finite(properties: &mut [Property]) -> usize {
     dropped
 }
 
+/// Checks the `names` of the properties read from `path` besides the coordinates: each once,
+/// none another coordinate (in any case, as readers find them), so that the table can be
+/// written and read back.
+pub(crate) fn check_names<'a>(
+    names: impl IntoIterator<Item = &'a str>,
+    path: &std::path::Path,
+) -> Result<(), crate::DataError> {
+    let mut seen = std::collections::HashSet::new();
+    for name in names {
+        let coordinate = ["x", "y", "z"].iter().any(|a| name.eq_ignore_ascii_case(a));
+        if coordinate || !seen.insert(name) {
+            return Err(crate::DataError::malformed(
+                path,
+                format!(
+                    "the property name {} appears twice",
+                    crate::error::quoted(name)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Builds a table from a file's properties: the cloud from its `x`, `y`, `z` columns (any
 /// type), the rest kept; the error names `path` and what is missing or invalid. `f32`
 /// coordinates are kept as they are ([`PositionType::F32`]); others are re-centred, with
@@ -637,6 +675,7 @@ pub fn from_properties(
     let x = take("x")?;
     let y = take("y")?;
     let z = take("z")?;
+    check_names(properties.iter().map(|p| p.name.as_str()), path)?;
     let geom = |source| crate::DataError::Geom {
         path: path.to_path_buf(),
         source,
@@ -652,6 +691,7 @@ pub fn from_properties(
             position_type: PositionType::F32,
             properties,
             exact_positions: None,
+            las_header: None,
         });
     }
     // A typed fast path for doubles: no per-value dispatch in the hot loops.
@@ -667,6 +707,7 @@ pub fn from_properties(
         position_type: PositionType::F64,
         properties,
         exact_positions,
+        las_header: None,
     })
 }
 

@@ -6,7 +6,8 @@
 //! `x`, `y`, `z` (any case) are the position; without such names the first three columns
 //! are. Every other column is kept as an `f64` property (named `column_<n>`, 1-based, when
 //! there is no header), which reproduces any decimal text value exactly on output. Blank
-//! lines and later `#` / `//` comment lines are skipped. The file is streamed line by line.
+//! lines and later `#` / `//` comment lines are skipped, and so is a UTF-8 byte-order mark at
+//! the start. The file is streamed line by line.
 //!
 //! Writing emits a header line (`//x y z ...` for `.xyz`/`.txt`, `x,y,z,...` for `.csv`).
 
@@ -66,6 +67,11 @@ pub(crate) fn read_properties(
         line_no += 1;
         let text = std::str::from_utf8(&buf)
             .map_err(|_| DataError::malformed(path, format!("line {line_no}: not text")))?;
+        // A byte-order mark (editors on Windows write one) is no part of the first value.
+        let text = match line_no {
+            1 => text.strip_prefix('\u{feff}').unwrap_or(text),
+            _ => text,
+        };
         if text.trim().is_empty() {
             continue;
         }
@@ -143,8 +149,9 @@ fn column_names(
         .collect();
     if names.len() != width {
         return Err(format!(
-            "{} names for {width} columns: '{header}'",
-            names.len()
+            "{} names for {width} columns: {}",
+            names.len(),
+            crate::error::quoted(header)
         ));
     }
     let named = ["x", "y", "z"]
@@ -204,6 +211,18 @@ mod tests {
         assert_eq!(t.property("i"), Some(&Column::F64(vec![1.0, 5.0])));
         let t = read("//lon lat h\n1 2 3\n").unwrap();
         assert_eq!(t.cloud.position_f64(0), [1.0, 2.0, 3.0]);
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        for text in ["\u{feff}1 2 3\n4 5 6\n", "\u{feff}x,y,z\n1,2,3\n4,5,6\n"] {
+            let t = read(text).unwrap();
+            assert_eq!(t.len(), 2, "{text:?}");
+            assert_eq!(t.cloud.position_f64(0), [1.0, 2.0, 3.0]);
+        }
+        // Only at the start: elsewhere it is no number.
+        let e = read("1 2 3\n\u{feff}4 5 6\n").unwrap_err().to_string();
+        assert!(e.contains("line 2, value 1"), "{e}");
     }
 
     #[test]

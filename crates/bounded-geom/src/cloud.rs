@@ -1,20 +1,185 @@
 use crate::GeomError;
+use rayon::prelude::*;
 
 /// A point cloud of positions only.
 ///
-/// Points are stored as `f32` offsets from an `f64` origin: 12 bytes per point. The
-/// constructors from `f64` positions take the centre of the bounding box, which keeps
-/// about a 16-millionth of the cloud's extent for any real-world coordinates; a reader
-/// of `f32` coordinates takes the origin 0 and keeps them exactly. Two clouds are equal
-/// when every point has the same absolute position, whatever their origins.
+/// Points are stored as `f32` offsets in a [`Frame`]: position = origin + scale x offset,
+/// with an `f64` origin and an exact power-of-four scale; 12 bytes per point. The
+/// constructors from `f64` positions take the centre of the bounding box as origin, which
+/// keeps about a 16-millionth of the cloud's extent for any real-world coordinates, and
+/// scale 1; a reader of `f32` coordinates takes the origin 0 and keeps them exactly. Two
+/// exceptions keep the offsets usable, each leaving ordinary clouds as just said:
+///
+/// - **Extent.** Offsets whose largest magnitude lies outside `[2^-30, 2^30]` are divided by
+///   the power of four that brings it into `[1, 4)` (the scale). The neighbour search squares
+///   `f32` differences, which overflow for clouds of about `1e19` and beyond and lose digits
+///   in subnormals for clouds of about `1e-20` and below; the features are scale-invariant,
+///   and scaling by a power of four is exact for every operation they use, square roots
+///   included, so a cloud scaled by `4^k` gets features bit for bit equal to the cloud's.
+/// - **Far outliers.** When a few points lie so far away that the bounding box is more than
+///   2^10 times larger than the bulk of the points (their eighth to seventh-eighth ranks per
+///   axis, on a fixed sample of at most 4096 points), the origin is the centre of the
+///   bounding box of the bulk and its surroundings (those ranks widened by their spread on
+///   each side) instead: the bulk keeps the offsets it has without the outliers, which lose
+///   at most one bit of the precision they had.
+///
+/// [`points`](Self::points) are the offsets; [`position_f64`](Self::position_f64) gives
+/// back the absolute positions. Positions are told apart by their offsets: points closer
+/// than the cloud's `f32` resolution (about 2^-24 of their distance from the origin, in
+/// absolute units) are one position to the neighbour search and to [`crate::Distinct`].
+/// Two clouds are equal when every point has the same absolute position, whatever their
+/// frames.
 #[derive(Debug, Clone)]
 pub struct PointCloud {
-    origin: [f64; 3],
+    frame: Frame,
     points: Vec<[f32; 3]>,
 }
 
+/// Where the `f32` offsets of a [`PointCloud`] are measured from: position = `origin` +
+/// `scale` x offset, `scale` a power of four (1 for ordinary clouds).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frame {
+    /// The position of offset 0.
+    pub origin: [f64; 3],
+    /// The length of a unit offset.
+    pub scale: f64,
+}
+
+/// Largest offset magnitudes in this range are kept as they are (scale 1).
+const SAFE: std::ops::RangeInclusive<f64> = (1.0 / (1u64 << 30) as f64)..=(1u64 << 30) as f64;
+
+/// The bounding box is "much larger" than the bulk of the points beyond this ratio.
+const FAR: f64 = 1024.0;
+
+/// Points sampled to find the bulk.
+const SAMPLE: usize = 4096;
+
+impl Frame {
+    /// The frame of the `len` finite positions `position(i)` whose bounding box has the
+    /// corners `lo`, `hi` (either way round per axis): the origin and scale the
+    /// [`PointCloud`] constructors take (see there).
+    pub fn of(
+        lo: [f64; 3],
+        hi: [f64; 3],
+        len: usize,
+        position: impl Fn(usize) -> [f64; 3] + Sync,
+    ) -> Self {
+        let (lo, hi) = (
+            std::array::from_fn(|a| lo[a].min(hi[a])),
+            std::array::from_fn(|a| lo[a].max(hi[a])),
+        );
+        let origin = match bulk(lo, hi, len, &position) {
+            Some((inner_lo, inner_hi)) => {
+                let (lo, hi) = (0..len)
+                    .into_par_iter()
+                    .map(&position)
+                    .filter(|p| (0..3).all(|a| (inner_lo[a]..=inner_hi[a]).contains(&p[a])))
+                    .map(|p| (p, p))
+                    .reduce(
+                        || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+                        |(l0, h0), (l1, h1)| {
+                            (
+                                std::array::from_fn(|a| l0[a].min(l1[a])),
+                                std::array::from_fn(|a| h0[a].max(h1[a])),
+                            )
+                        },
+                    );
+                centre(lo, hi)
+            }
+            None => centre(lo, hi),
+        };
+        // Half the largest distance from the origin along an axis (halves cannot overflow).
+        let half_reach = (0..3)
+            .map(|a| (0.5 * hi[a] - 0.5 * origin[a]).max(0.5 * origin[a] - 0.5 * lo[a]))
+            .fold(0.0, f64::max);
+        Self {
+            origin,
+            scale: scale_for(half_reach),
+        }
+    }
+
+    /// The offset of the absolute position `p`.
+    pub fn local(&self, p: [f64; 3]) -> [f32; 3] {
+        // Divided first, so that no difference overflows; exact for scale 1.
+        std::array::from_fn(|a| (p[a] / self.scale - self.origin[a] / self.scale) as f32)
+    }
+
+    /// The absolute position of the offset `q`.
+    pub fn absolute(&self, q: [f32; 3]) -> [f64; 3] {
+        std::array::from_fn(|a| self.origin[a] + self.scale * f64::from(q[a]))
+    }
+}
+
+/// The centre of the box `lo`..`hi`, halved first so that it cannot overflow (the same as
+/// `0.5 * (lo + hi)` otherwise: halving is exact).
+fn centre(lo: [f64; 3], hi: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|a| 0.5 * lo[a] + 0.5 * hi[a])
+}
+
+/// The box of the bulk of the positions and its surroundings, when the bounding box `lo`..`hi`
+/// is more than [`FAR`] times larger: the eighth and seventh-eighth ranks of a fixed sample
+/// per axis, widened on each side by the largest spread between them.
+fn bulk(
+    lo: [f64; 3],
+    hi: [f64; 3],
+    len: usize,
+    position: &(impl Fn(usize) -> [f64; 3] + Sync),
+) -> Option<([f64; 3], [f64; 3])> {
+    let m = len.min(SAMPLE);
+    if m == 0 {
+        return None;
+    }
+    let sample: Vec<[f64; 3]> = (0..m).map(|j| position(j * len / m)).collect();
+    let mut ranks = [[0.0; 2]; 3];
+    let mut axis = vec![0.0; m];
+    for (a, rank) in ranks.iter_mut().enumerate() {
+        for (v, p) in axis.iter_mut().zip(&sample) {
+            *v = p[a];
+        }
+        axis.sort_unstable_by(f64::total_cmp);
+        *rank = [axis[m / 8], axis[m - 1 - m / 8]];
+    }
+    let spread = ranks.iter().map(|[l, h]| h - l).fold(0.0, f64::max);
+    let inner_lo = ranks.map(|[l, _]| l - spread);
+    let inner_hi = ranks.map(|[_, h]| h + spread);
+    let inside = (0..3).all(|a| inner_lo[a] <= lo[a] && hi[a] <= inner_hi[a]);
+    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+    (!inside && extent > FAR * spread).then_some((inner_lo, inner_hi))
+}
+
+/// The scale of offsets whose largest magnitude is `2 * half` (halves cannot overflow): 1
+/// when that lies in [`SAFE`] (or is 0), else the power of four that brings it into `[1, 4)`.
+fn scale_for(half: f64) -> f64 {
+    if half == 0.0 || !half.is_finite() || SAFE.contains(&(2.0 * half)) {
+        return 1.0;
+    }
+    let exponent = floor_log2(half) + 1;
+    power_of_two(exponent.div_euclid(2) * 2)
+}
+
+/// `floor(log2(x))` of a positive finite `x`, exactly (from its bits).
+fn floor_log2(x: f64) -> i32 {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    if biased == 0 {
+        // Subnormal: x = mantissa * 2^-1074.
+        63 - (bits & ((1 << 52) - 1)).leading_zeros() as i32 - 1074
+    } else {
+        biased - 1023
+    }
+}
+
+/// `2^e`, exactly, for `e` in `-1074..=1023`.
+fn power_of_two(e: i32) -> f64 {
+    if e >= -1022 {
+        f64::from_bits(((e + 1023) as u64) << 52)
+    } else {
+        f64::from_bits(1 << (e + 1074))
+    }
+}
+
 impl PointCloud {
-    /// Builds a cloud from absolute `f64` positions, re-centred on their bounding-box centre.
+    /// Builds a cloud from absolute `f64` positions, in the [`Frame`] of their bounding box.
     ///
     /// Fails on an empty slice or on any NaN / infinite coordinate.
     pub fn from_f64(positions: &[[f64; 3]]) -> Result<Self, GeomError> {
@@ -26,7 +191,7 @@ impl PointCloud {
     /// Lets readers hand over positions without building an intermediate `Vec`.
     pub fn from_iter_f64(
         len: usize,
-        position: impl Fn(usize) -> [f64; 3],
+        position: impl Fn(usize) -> [f64; 3] + Sync,
     ) -> Result<Self, GeomError> {
         if len == 0 {
             return Err(GeomError::Empty);
@@ -43,20 +208,24 @@ impl PointCloud {
                 hi[a] = hi[a].max(p[a]);
             }
         }
-        let origin = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
-        let points = (0..len)
-            .map(|i| {
-                let p = position(i);
-                [0, 1, 2].map(|a| (p[a] - origin[a]) as f32)
-            })
-            .collect();
-        Ok(Self { origin, points })
+        let frame = Frame::of(lo, hi, len, &position);
+        let points = (0..len).map(|i| frame.local(position(i))).collect();
+        Self::from_frame(frame, points)
     }
 
-    /// Builds a cloud from positions already relative to `origin`.
+    /// Builds a cloud from positions already relative to `origin` (scale 1).
     ///
     /// Fails on an empty slice or on any NaN / infinite coordinate.
     pub fn from_local(origin: [f64; 3], points: Vec<[f32; 3]>) -> Result<Self, GeomError> {
+        Self::from_frame(Frame { origin, scale: 1.0 }, points)
+    }
+
+    /// Builds a cloud from offsets in `frame`, whose scale must be a power of two; the
+    /// offsets are rescaled (exactly, by a power of four) if their magnitude calls for it
+    /// (see the type's documentation).
+    ///
+    /// Fails on an empty slice or on any NaN / infinite coordinate.
+    pub fn from_frame(frame: Frame, mut points: Vec<[f32; 3]>) -> Result<Self, GeomError> {
         if points.is_empty() {
             return Err(GeomError::Empty);
         }
@@ -67,10 +236,23 @@ impl PointCloud {
         {
             return Err(GeomError::NonFinite {
                 index,
-                value: p.map(f64::from),
+                value: frame.absolute(*p),
             });
         }
-        Ok(Self { origin, points })
+        let magnitude = points
+            .par_iter()
+            .map(|p| p.map(f32::abs).into_iter().fold(0f32, f32::max))
+            .reduce(|| 0f32, f32::max);
+        let rescale = scale_for(0.5 * f64::from(magnitude));
+        let mut frame = frame;
+        if rescale != 1.0 {
+            let inverse = 1.0 / rescale;
+            points
+                .par_iter_mut()
+                .for_each(|p| *p = p.map(|c| (f64::from(c) * inverse) as f32));
+            frame.scale *= rescale;
+        }
+        Ok(Self { frame, points })
     }
 
     /// Number of points.
@@ -85,18 +267,29 @@ impl PointCloud {
 
     /// The origin that [`points`](Self::points) are relative to.
     pub fn origin(&self) -> [f64; 3] {
-        self.origin
+        self.frame.origin
     }
 
-    /// Re-centred positions, relative to [`origin`](Self::origin).
+    /// The length of a unit offset in [`points`](Self::points): 1 for ordinary clouds, a
+    /// power of four for clouds of extreme extents (see the type's documentation).
+    pub fn scale(&self) -> f64 {
+        self.frame.scale
+    }
+
+    /// The origin and scale of the offsets.
+    pub fn frame(&self) -> Frame {
+        self.frame
+    }
+
+    /// The offsets of the points from [`origin`](Self::origin), in units of
+    /// [`scale`](Self::scale).
     pub fn points(&self) -> &[[f32; 3]] {
         &self.points
     }
 
     /// Absolute position of point `i`.
     pub fn position_f64(&self, i: usize) -> [f64; 3] {
-        let p = self.points[i];
-        [0, 1, 2].map(|a| self.origin[a] + f64::from(p[a]))
+        self.frame.absolute(self.points[i])
     }
 }
 

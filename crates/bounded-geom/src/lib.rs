@@ -45,6 +45,7 @@
 //! assert_eq!(neighbours, [1, 0]); // the point itself first
 //! ```
 
+pub mod atomic;
 mod class;
 mod cloud;
 mod distinct;
@@ -60,7 +61,7 @@ mod select;
 mod smallest;
 
 pub use class::Class;
-pub use cloud::PointCloud;
+pub use cloud::{Frame, PointCloud};
 pub use distinct::Distinct;
 pub use eigen::{Eigen3, Sym3, cross, dot, eigenvalues_batch};
 pub use error::GeomError;

@@ -34,9 +34,12 @@ pub enum NnError {
     /// The model file could not be decoded.
     #[error("cannot decode model file: {0}")]
     Decode(#[from] rmp_serde::decode::Error),
-    /// Reading or writing a model file failed.
+    /// Reading a model file failed.
     #[error("model file I/O: {0}")]
     Io(#[from] std::io::Error),
+    /// Writing a model file failed (nothing was left at its path).
+    #[error("cannot write the model file {0}")]
+    Write(#[from] bounded_geom::atomic::WriteError),
     /// Feature extraction failed (bad scales, too few distinct positions).
     #[error(transparent)]
     Features(#[from] bounded_features::FeatureError),

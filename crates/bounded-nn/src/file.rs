@@ -23,6 +23,16 @@ pub const MAGIC: [u8; 8] = *b"BOUNDED\0";
 /// version from 1.
 pub const FORMAT_VERSION: u32 = 2;
 
+/// The largest magnitude of a weight, bias, mean or standard deviation a valid file holds.
+/// Trained weights are of order 1 (the inputs are standardised) and the features are ratios
+/// of order 1: a value beyond a million is a corrupt or crafted file, whose products would
+/// overflow to infinities and NaN probabilities.
+pub const MAX_VALUE: f32 = 1e6;
+
+/// The smallest standard deviation, exclusive, a valid file holds: what training keeps
+/// (smaller ones become 1), as dividing by a tiny one overflows.
+pub const MIN_STD: f32 = crate::standardisation::MIN_STD;
+
 /// Where a model came from: enough to reproduce it and to recognise its training data.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Provenance {
@@ -171,8 +181,11 @@ impl ModelFile {
                 self.model.n_inputs()
             ));
         }
-        if std.std.iter().any(|&s| s <= 0.0) {
-            return bad("non-positive standard deviation".into());
+        if let Some(s) = std.std.iter().find(|&&s| s.is_nan() || s <= MIN_STD) {
+            return bad(format!(
+                "standard deviation {s:e}: each must be above {MIN_STD:e} (training sets 1 for \
+                 constant inputs)"
+            ));
         }
         if let Some(second) = &self.second_stage {
             second.validate()?;
@@ -195,12 +208,15 @@ impl ModelFile {
             .layers
             .iter()
             .flat_map(|l| l.weight.iter().chain(&l.bias));
-        if !numbers
+        if let Some(v) = numbers
             .chain(&std.mean)
             .chain(&std.std)
-            .all(|v| v.is_finite())
+            .find(|v| v.is_nan() || v.abs() > MAX_VALUE)
         {
-            return bad("non-finite weight or standardisation value".into());
+            return bad(format!(
+                "weight or standardisation value {v:e}: each must be finite and at most \
+                 {MAX_VALUE:e} in magnitude"
+            ));
         }
         Ok(())
     }
@@ -234,9 +250,13 @@ impl ModelFile {
         Ok(file)
     }
 
-    /// Writes the file to `path`.
+    /// Writes the file to `path`, atomically ([`bounded_geom::atomic`]: a failed or
+    /// interrupted write leaves any previous file in place and no partial one).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), NnError> {
-        Ok(std::fs::write(path, self.to_bytes()?)?)
+        Ok(bounded_geom::atomic::write(
+            path.as_ref(),
+            &self.to_bytes()?,
+        )?)
     }
 
     /// Reads and validates the file at `path`.
@@ -382,6 +402,92 @@ pub(crate) mod tests {
         let mut file = random_file(4, 12, 1);
         file.model.n_scales = 8;
         assert!(file.validate().is_err());
+    }
+
+    #[test]
+    fn declared_sizes_beyond_the_weights_fail_before_allocating() {
+        // Sizes whose layer list would need 2^27 to 2^62 entries, or whose products overflow:
+        // each fails on the layer count or the overflow check, allocating nothing for them.
+        for (scales, features, width) in [
+            (1usize << 63, 12, 12),
+            (1 << 32, 12, 12),
+            (1 << 28, 12, 12),
+            (4, 1 << 63, 12),
+            (4, 12, 1 << 63),
+            (4, 12, 1 << 32),
+        ] {
+            let mut file = random_file(4, 12, 1);
+            file.model.n_scales = scales;
+            file.model.features_per_scale = features;
+            file.model.fusion_widths[0] = width;
+            let e = ModelFile::from_bytes(&file.to_bytes().unwrap()).unwrap_err();
+            assert!(
+                matches!(
+                    &e,
+                    NnError::InconsistentModel(_) | NnError::InvalidConfig(_)
+                ),
+                "{scales} x {features}, width {width}: {e}"
+            );
+        }
+        let mut file = random_file(4, 12, 1);
+        file.model.hidden_widths = vec![1 << 40, 1 << 40];
+        let e = ModelFile::from_bytes(&file.to_bytes().unwrap()).unwrap_err();
+        assert!(e.to_string().contains("sizes overflow"), "{e}");
+    }
+
+    #[test]
+    fn huge_non_finite_values_and_tiny_deviations_are_refused() {
+        let set = |f: &mut ModelFile, what: usize, v: f32| match what {
+            0 => f.layers[2].weight[5] = v,
+            1 => f.layers[0].bias[1] = v,
+            2 => f.standardisation.mean[3] = v,
+            _ => f.standardisation.std[3] = v,
+        };
+        for what in 0..4 {
+            for v in [f32::NAN, f32::INFINITY, -f32::INFINITY, 1.25e38, -2e6] {
+                let mut file = random_file(4, 12, 1);
+                set(&mut file, what, v);
+                let e = ModelFile::from_bytes(&file.to_bytes().unwrap()).unwrap_err();
+                let expected = if what == 3 && (v.is_nan() || v < 0.0) {
+                    "standard deviation"
+                } else {
+                    "each must be finite and at most 1e6 in magnitude"
+                };
+                assert!(e.to_string().contains(expected), "{what} {v}: {e}");
+            }
+            // The bound itself is allowed.
+            let mut file = random_file(4, 12, 1);
+            set(&mut file, what, 1e6);
+            assert!(file.validate().is_ok());
+        }
+        for tiny in [1e-45, 1e-6, 0.0, -1.0] {
+            let mut file = random_file(4, 12, 1);
+            file.standardisation.std[0] = tiny;
+            let e = file.validate().unwrap_err().to_string();
+            assert!(e.contains("each must be above 1e-6"), "{tiny}: {e}");
+        }
+        // The shipped model passes.
+        let shipped = ModelFile::from_bytes(include_bytes!("../models/default.bmodel"));
+        assert!(shipped.is_ok());
+    }
+
+    #[test]
+    fn saving_replaces_the_file_and_never_rewrites_it_in_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.bmodel");
+        let (old, new) = (random_file(2, 6, 1), random_file(2, 6, 2));
+        old.save(&path).unwrap();
+        // A second name for the old file keeps the old model: the save wrote a new file.
+        let link = dir.path().join("old.bmodel");
+        std::fs::hard_link(&path, &link).unwrap();
+        new.save(&path).unwrap();
+        assert_eq!(ModelFile::load(&path).unwrap(), new);
+        assert_eq!(ModelFile::load(&link).unwrap(), old);
+        let names = std::fs::read_dir(dir.path()).unwrap().count();
+        assert_eq!(names, 2, "no temporary file left");
+        // A directory at the path is refused, naming it.
+        let e = new.save(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
     }
 
     #[test]

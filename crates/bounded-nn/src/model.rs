@@ -85,7 +85,44 @@ impl ModelConfig {
         if !self.leaky_slope.is_finite() {
             return bad("leaky_slope must be finite".into());
         }
+        // Every size the network is built from must be computable: a model file may declare
+        // any number, and the weights it holds are checked against these products.
+        let too_large = || {
+            bad(format!(
+                "the network's sizes overflow: {} scales of {} features, fusion widths {:?}, \
+                 hidden widths {:?}",
+                self.n_scales, self.features_per_scale, self.fusion_widths, self.hidden_widths
+            ))
+        };
+        if self.n_scales.checked_mul(self.features_per_scale).is_none() {
+            return too_large();
+        }
+        let (mut nodes, mut width, mut level) = (self.n_scales, self.features_per_scale, 0);
+        while nodes > 1 {
+            let out = self.fusion_width(level);
+            if width
+                .checked_mul(2)
+                .and_then(|d| d.checked_mul(out))
+                .is_none()
+            {
+                return too_large();
+            }
+            (nodes, width, level) = (nodes / 2, out, level + 1);
+        }
+        for &h in self.hidden_widths.iter().chain(&[N_CLASSES]) {
+            if width.checked_mul(h).is_none() {
+                return too_large();
+            }
+            width = h;
+        }
         Ok(())
+    }
+
+    /// Number of fully connected layers: `n_scales - 1` fusion layers, the hidden layers and
+    /// the output layer (counted without building [`layer_shapes`](Self::layer_shapes), which
+    /// is as long; call after [`validate`](Self::validate)).
+    pub fn n_layers(&self) -> usize {
+        self.n_scales - 1 + self.hidden_widths.len() + 1
     }
 
     /// Number of inputs per point: `n_scales * features_per_scale`.
@@ -154,16 +191,18 @@ impl ModelConfig {
             .collect()
     }
 
-    /// Checks that `weights` has the layer count and shapes of this configuration.
+    /// Checks that `weights` has the layer count and shapes of this configuration (call after
+    /// [`validate`](Self::validate)). The count is compared first, so that a configuration
+    /// declaring a huge network allocates nothing for it.
     pub fn check_weights(&self, weights: &[LayerWeights]) -> Result<(), NnError> {
-        let shapes = self.layer_shapes();
-        if weights.len() != shapes.len() {
+        if weights.len() != self.n_layers() {
             return Err(NnError::InconsistentModel(format!(
                 "{} layers given, the configuration has {}",
                 weights.len(),
-                shapes.len()
+                self.n_layers()
             )));
         }
+        let shapes = self.layer_shapes();
         for (k, (w, &(d_in, d_out))) in weights.iter().zip(&shapes).enumerate() {
             if (w.d_in, w.d_out) != (d_in, d_out)
                 || w.weight.len() != d_in * d_out

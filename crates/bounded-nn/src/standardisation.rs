@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::NnError;
 
 /// Standard deviations below this are treated as constant inputs (scaled by 1, only centred).
-const MIN_STD: f32 = 1e-6;
+pub(crate) const MIN_STD: f32 = 1e-6;
 
 /// Mean and standard deviation of every network input.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -6,8 +6,8 @@
 
 use super::{load_set, peer_methods, rate, training_clouds};
 use crate::cli::BenchArgs;
+use crate::pipeline;
 use crate::progress::FitBars;
-use crate::{atomic, pipeline};
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_data::peers;
@@ -341,7 +341,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         start.elapsed().as_secs_f64() / 60.0
     );
     let path = args.output.join("report.md");
-    atomic::write_text(&path, &report)?;
+    bounded_geom::atomic::write(&path, report.as_bytes())?;
     println!("{report}");
     eprintln!("wrote {}", path.display());
     Ok(())

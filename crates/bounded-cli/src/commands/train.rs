@@ -1,7 +1,6 @@
 //! `bounded train`: features of labelled clouds, computed once, then the classifier.
 
 use super::training_clouds;
-use crate::atomic;
 use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
 use crate::progress::{self, FitBars};
 use anyhow::{Context, Result, bail};
@@ -9,15 +8,8 @@ use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 use bounded_nn::{ModelFile, Schedule, Widths, fit_stages};
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
-
-/// Writes a model file atomically.
-pub fn save(file: &ModelFile, path: &Path) -> Result<()> {
-    let bytes = file.to_bytes()?;
-    atomic::write_with(path, |out| Ok(out.write_all(&bytes)?))
-}
 
 /// The feature groups selected on the command line.
 pub fn groups(selected: &[FeatureGroupArg]) -> Result<FeatureGroups> {
@@ -90,7 +82,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             progress,
         )
     })?;
-    save(&file, &args.output)?;
+    file.save(&args.output)?;
     eprintln!(
         "{} clouds, {} points ({} sharp, {} boundary): features {:.1} s, \
          total {:.1} s, best validation loss {:.4}; wrote {}",

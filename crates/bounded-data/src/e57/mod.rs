@@ -17,11 +17,22 @@
 //!
 //! Writing: one scan in the file's frame, or one per index of a `scan` property as reading a
 //! file of several scans gives it (uint, in scan order); positions as the input stored them
-//! (single or double floats, or scaled integers with a LAS input's scale and offset);
+//! (single or double floats, or scaled integers with a LAS input's scale and offset), with
+//! `cartesianInvalidState` 0 (valid) at every point, which pye57's `read_scan` requires;
 //! `intensity` and `red`, `green`, `blue` in the standard fields (a NaN as the field's
 //! invalid flag), so every E57 viewer shows them; every other property, the detection
-//! results among them, as an attribute of the `bounded` extension, which other readers skip
-//! and this one reads back under its name.
+//! results among them, as an attribute of the `bounded` extension (namespace
+//! `urn:bounded-rs:point-attributes`), which other readers skip and this one reads back
+//! under its name. E57 has no standard field for a class or a probability. libE57Format
+//! (and pye57 through it) reads such a field by its prefixed name, `bounded:p_sharp`:
+//!
+//! ```text
+//! e57 = pye57.E57("out.e57"); header = e57.get_header(0); n = header.point_count
+//! p_sharp = numpy.empty(n, numpy.float32)
+//! buffers = pye57.libe57.VectorSourceDestBuffer()
+//! buffers.append(pye57.libe57.SourceDestBuffer(e57.image_file, "bounded:p_sharp", p_sharp, n, True, True))
+//! header.points.reader(buffers).read()
+//! ```
 
 mod read;
 #[cfg(test)]

@@ -90,7 +90,8 @@ fn attribute_names(scans: &[PointCloud], taken: &[&str]) -> Result<Vec<String>, 
             };
             if taken.iter().any(|r| r.eq_ignore_ascii_case(name)) || in_scan.contains(&name) {
                 return Err(format!(
-                    "E57: the attribute '{namespace}:{name}' clashes with another field of that name"
+                    "E57: the attribute {} clashes with another field of that name",
+                    crate::error::quoted(&format!("{namespace}:{name}"))
                 ));
             }
             in_scan.push(name);

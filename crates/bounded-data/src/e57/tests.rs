@@ -249,6 +249,8 @@ fn written_tables_read_back_with_every_property_and_position() {
         format!("{:?}", Record::CARTESIAN_X_F32)
     );
     let standard = [
+        // pye57's `read_scan` requires it.
+        RecordName::CartesianInvalidState,
         RecordName::Intensity,
         RecordName::IsIntensityInvalid,
         RecordName::ColorRed,

@@ -7,8 +7,8 @@ use e57::{
     ColorLimits, E57Writer, Extension, IntensityLimits, Record, RecordDataType, RecordName,
     RecordValue,
 };
-use std::fs::File;
 use std::hash::{DefaultHasher, Hash, Hasher};
+use std::io::{Read, Seek, Write};
 use std::ops::Range;
 use std::path::Path;
 
@@ -16,6 +16,9 @@ use std::path::Path;
 enum Source<'a> {
     /// Coordinate `axis` of the position.
     Axis(usize),
+    /// The Cartesian invalid state: 0, a valid position, for every point (the table holds
+    /// no others).
+    ValidPosition,
     /// A property's values as they are.
     Values(&'a Column),
     /// A property's values in a standard field: 0 where NaN, which the field's flag marks.
@@ -41,6 +44,12 @@ impl<'a> Layout<'a> {
             .enumerate()
             .map(|(axis, record)| (record, Source::Axis(axis)))
             .collect();
+        // pye57's `read_scan` refuses a scan without it.
+        let state = Record {
+            name: RecordName::CartesianInvalidState,
+            data_type: RecordDataType::Integer { min: 0, max: 2 },
+        };
+        fields.push((state, Source::ValidPosition));
         let property = |name: &str| {
             (view.properties.iter())
                 .find(|p| p.name == name)
@@ -103,6 +112,7 @@ impl<'a> Layout<'a> {
                 let ty = &record.data_type;
                 match source {
                     Source::Axis(axis) => encode(p[*axis], ty),
+                    Source::ValidPosition => RecordValue::Integer(0),
                     Source::Values(column) => encode(column.get_f64(i), ty),
                     Source::Valid(column) => {
                         let v = column.get_f64(i);
@@ -119,8 +129,8 @@ impl<'a> Layout<'a> {
 
 /// Writes `view` to the empty `file` (see the module documentation); `path` names it in
 /// errors.
-pub(crate) fn write_to(
-    file: &mut File,
+pub(crate) fn write_to<W: Read + Write + Seek>(
+    file: &mut W,
     view: &TableView<'_>,
     path: &Path,
 ) -> Result<(), DataError> {

@@ -15,12 +15,25 @@
 //! 0.006 degrees), `user_data`, `point_source_id`, `gps_time`, `red`/`green`/`blue`, `nir`,
 //! and the one-bit flags (`synthetic`, `key_point`, `withheld`, `overlap`,
 //! `scanner_channel`, `scan_direction`, `edge_of_flight_line`) when any point sets them.
-//! Extra Bytes are decoded by their Extra Bytes VLR into named properties (untyped or
-//! 64-bit ones as one `u8` property per byte). Waveform packet fields are not kept.
+//! Extra Bytes are decoded by their Extra Bytes VLR into named properties: arrays of two or
+//! three values (the deprecated data types 11-30, which laspy writes) as `name_0`, `name_1`,
+//! `name_2`, untyped or 64-bit ones as one `u8` property per byte (`name_0`, `name_1`, ...).
+//! A property name that repeats another, or names a coordinate, is refused. Waveform packet
+//! fields are not kept.
+//!
+//! The point count of a LAS 1.4 file is its 64-bit count, which the specification requires
+//! to be correct whatever the legacy 32-bit one says (as laspy and PDAL read it; the `las`
+//! crate prefers a non-zero legacy count). A legacy count only is read as the count.
 //!
 //! Writing produces LAS 1.4 with point format 6, 7 (with colour) or 8 (with NIR), so that
-//! classification codes above 31 fit. A `class` property (BoundED classes) goes to the
-//! Classification field with these codes:
+//! classification codes above 31 fit. A property named like a field of the format fills it
+//! (`classification`, `intensity`, `gps_time`, `red`, ...; a legacy `scan_angle_rank` becomes
+//! `scan_angle`); every other property (for example `p_nonedge`, `p_sharp`, `p_boundary`) is
+//! written as Extra Bytes with an Extra Bytes VLR (user `LASF_Spec`, record 4), which PDAL,
+//! laspy and CloudCompare read as named dimensions. 8-bit colours are scaled to LAS's 16-bit
+//! range (x 257). Annotated outputs put the class in the Classification field, with these
+//! codes by default, or in an Extra Bytes field `class` (see
+//! [`ClassTarget`](crate::annotate::ClassTarget)):
 //!
 //! | BoundED class | LAS Classification |
 //! |---|---|
@@ -28,14 +41,10 @@
 //! | sharp edge (1) | 64, first user-definable code |
 //! | boundary (2) | 65, user-definable |
 //!
-//! and an input `classification` is then kept as the extra-bytes property
-//! `input_classification`. Every property that is not a LAS field (for example `p_nonedge`,
-//! `p_sharp`, `p_boundary`) is written as Extra Bytes with an Extra Bytes VLR (user
-//! `LASF_Spec`, record 4), which PDAL and CloudCompare read as named dimensions. 8-bit
-//! colours are scaled to LAS's 16-bit range (x 257). Coordinates of a LAS input keep its
-//! scale and offset; other clouds get their bounding-box centre as offset and a power-of-ten
-//! scale fine enough for the cloud's `f32` precision.
+//! Coordinates of a LAS input keep its scale and offset; other clouds get their bounding-box
+//! centre as offset and a power-of-ten scale fine enough for the cloud's `f32` precision.
 
+mod header;
 mod layout;
 mod read;
 #[cfg(test)]
@@ -45,6 +54,7 @@ mod write;
 use crate::DataError;
 use std::path::Path;
 
+pub use header::InputHeader;
 pub use read::read_from;
 pub use write::write_to;
 

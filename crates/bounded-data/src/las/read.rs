@@ -1,5 +1,6 @@
 //! Reading: the header through the `las` crate, the records in blocks decoded in parallel.
 
+use super::header::InputHeader;
 use super::las_error;
 use super::layout::*;
 use crate::DataError;
@@ -26,8 +27,21 @@ pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     path: &Path,
     max_block: usize,
 ) -> Result<PointTable, DataError> {
-    check_evlr_lengths(&mut input, path)?;
+    let raw = check_evlr_lengths(&mut input, path)?;
+    // LAS 1.4: the 64-bit count, also where the legacy one differs (see the module docs).
+    let zero_legacy = raw.large_file.is_some_and(|l| {
+        l.number_of_point_records != 0
+            && l.number_of_point_records != u64::from(raw.number_of_point_records)
+    });
+    let mut input = LegacyCount {
+        inner: input,
+        at: 0,
+        zero: zero_legacy,
+    };
     let header = Header::new(&mut input).map_err(|e| las_error(path, e))?;
+    if header.point_format().is_compressed {
+        check_chunk_table(&mut input, &header, &raw, path)?;
+    }
     let (names, slots, record_len) = record_fields(&header, path)?;
     let total = usize::try_from(header.number_of_points()).map_err(|_| {
         DataError::malformed(
@@ -48,13 +62,51 @@ pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     } else {
         read_las(input, blocks, &slots, path)?
     };
-    into_table(header.transforms(), names, &slots, decoded, path)
+    let mut table = into_table(header.transforms(), names, &slots, decoded, path)?;
+    let input = InputHeader::of(&header).map_err(|e| las_error(path, e))?;
+    apply_scaling(&mut table.properties, &input.descriptors);
+    table.las_header = Some(input);
+    Ok(table)
 }
 
-/// Checks that every extended VLR fits in the file, then rewinds `input`: the las crate
-/// allocates an EVLR's stated length (up to 2^64 bytes) before reading it, so a corrupt
-/// length must fail here, not exhaust memory (found by fuzzing).
-fn check_evlr_lengths(mut input: impl Read + Seek, path: &Path) -> Result<(), DataError> {
+/// A LAS file read with its legacy point count (the `u32` at byte 107) as 0 when `zero`, so
+/// that the las crate takes the LAS 1.4 64-bit count instead.
+struct LegacyCount<R> {
+    inner: R,
+    /// The position in `inner`.
+    at: u64,
+    zero: bool,
+}
+
+impl<R: Read> Read for LegacyCount<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if self.zero && self.at < 111 && self.at + n as u64 > 107 {
+            for (k, b) in buf[..n].iter_mut().enumerate() {
+                if (107..111).contains(&(self.at + k as u64)) {
+                    *b = 0;
+                }
+            }
+        }
+        self.at += n as u64;
+        Ok(n)
+    }
+}
+
+impl<R: Seek> Seek for LegacyCount<R> {
+    fn seek(&mut self, to: SeekFrom) -> std::io::Result<u64> {
+        self.at = self.inner.seek(to)?;
+        Ok(self.at)
+    }
+}
+
+/// Checks that every extended VLR fits in the file, then rewinds `input` and returns the raw
+/// header: the las crate allocates an EVLR's stated length (up to 2^64 bytes) before reading
+/// it, so a corrupt length must fail here, not exhaust memory (found by fuzzing).
+fn check_evlr_lengths(
+    mut input: impl Read + Seek,
+    path: &Path,
+) -> Result<las::raw::Header, DataError> {
     let io = |e| DataError::io(path, e);
     let raw = las::raw::Header::read_from(&mut input).map_err(|e| las_error(path, e))?;
     let end = input.seek(SeekFrom::End(0)).map_err(io)?;
@@ -89,7 +141,69 @@ fn check_evlr_lengths(mut input: impl Read + Seek, path: &Path) -> Result<(), Da
                 })?;
         }
     }
+    input.rewind().map_err(io)?;
+    Ok(raw)
+}
+
+/// Checks the chunk count of a chunked LAZ file's chunk table against the file, then rewinds
+/// `input`: the laz crate reserves 16 bytes per declared chunk before reading them (2^32
+/// chunks: 68 GB). Every chunk starts with its first point stored whole, so the point data
+/// between its start (after the table's 8-byte offset) and the table holds at most its
+/// length over the record length chunks. Where the table is, is found as the crate finds it:
+/// the first 8 bytes of the point data, or the file's last 8 when those were never updated.
+fn check_chunk_table(
+    mut input: impl Read + Seek,
+    header: &Header,
+    raw: &las::raw::Header,
+    path: &Path,
+) -> Result<(), DataError> {
+    let io = |e| DataError::io(path, e);
+    // The LASzip VLR's compressor: 2 (point-wise) and 3 (layered) are chunked.
+    let chunked = header
+        .all_vlrs()
+        .find(|v| v.user_id == "laszip encoded" && v.record_id == 22204)
+        .and_then(|v| v.data.first_chunk::<2>().copied())
+        .is_some_and(|c| u16::from_le_bytes(c) >= 2);
+    if !chunked {
+        return Ok(());
+    }
+    let data = u64::from(raw.offset_to_point_data);
+    // Too short to hold an offset: the crate's own reading fails on it.
+    let mut table = word_at(&mut input, SeekFrom::Start(data)).map_or(0, i64::from_le_bytes);
+    if table <= data as i64 {
+        table = word_at(&mut input, SeekFrom::End(-8)).map_or(0, i64::from_le_bytes);
+    }
+    // A table the crate cannot read, it does without (or names it).
+    if let Some(word) = (table > data as i64)
+        .then(|| word_at(&mut input, SeekFrom::Start(table as u64)))
+        .flatten()
+    {
+        let chunks = u64::from(u32::from_le_bytes([word[4], word[5], word[6], word[7]]));
+        let room = (table as u64).saturating_sub(data + 8);
+        let record_len = u64::from(raw.point_data_record_length).max(1);
+        if chunks > room / record_len {
+            return Err(DataError::malformed(
+                path,
+                format!(
+                    "LAZ: the chunk table declares {chunks} chunks, but the {room} bytes of point \
+                     data before it hold at most {} (each starts with a whole {record_len}-byte \
+                     point)",
+                    room / record_len
+                ),
+            ));
+        }
+    }
     input.rewind().map_err(io)
+}
+
+/// The 8 bytes at `at`, if the file holds them.
+fn word_at(input: &mut (impl Read + Seek), at: SeekFrom) -> Option<[u8; 8]> {
+    let mut word = [0u8; 8];
+    input
+        .seek(at)
+        .and_then(|_| input.read_exact(&mut word))
+        .ok()?;
+    Some(word)
 }
 
 /// The names and slots of the fields of the records of `header` after x, y, z (the standard
@@ -108,11 +222,12 @@ fn record_fields(
             "LAS: inconsistent point record length",
         ));
     }
-    let (names, slots) = standard
+    let (names, slots): (Vec<String>, _) = standard
         .into_iter()
         .map(|(n, s)| (n.to_string(), s))
         .chain(extra_fields(header, base_len, extra_len))
         .unzip();
+    crate::table::check_names(names.iter().map(String::as_str), path)?;
     Ok((names, slots, record_len))
 }
 
@@ -312,6 +427,7 @@ fn into_table(
         },
         properties,
         exact_positions,
+        las_header: None,
     })
 }
 
@@ -339,22 +455,22 @@ pub(super) fn cloud_of(
             )
         },
     );
+    if xyz.is_empty() {
+        return Err(bounded_geom::GeomError::Empty);
+    }
     let (lo, hi) = (absolute(lo), absolute(hi));
-    let origin: [f64; 3] = std::array::from_fn(|a| 0.5 * (lo[a].min(hi[a]) + lo[a].max(hi[a])));
-    if xyz.is_empty() || !origin.iter().all(|o| o.is_finite()) {
-        // Let the general constructor name the empty cloud or the first non-finite point.
+    if !lo.iter().chain(&hi).all(|c| c.is_finite()) {
+        // Let the general constructor name the first non-finite point.
         let cloud = bounded_geom::PointCloud::from_iter_f64(xyz.len(), |i| absolute(xyz[i]))?;
         return Ok((cloud, None));
     }
-    let local = move |p: [i32; 3]| {
-        let p = absolute(p);
-        std::array::from_fn::<f32, 3, _>(|a| (p[a] - origin[a]) as f32)
-    };
+    let frame = bounded_geom::Frame::of(lo, hi, xyz.len(), |i| absolute(xyz[i]));
+    let local = move |p: [i32; 3]| frame.local(absolute(p));
     // What the writer makes of the offset on the same scale and offset.
     let returns = |p: [i32; 3]| {
-        let q = local(p);
+        let q = frame.absolute(local(p));
         (0..3).all(|a| {
-            let steps = (origin[a] + f64::from(q[a]) - axes[a].offset) / axes[a].scale;
+            let steps = (q[a] - axes[a].offset) / axes[a].scale;
             steps.round() == f64::from(p[a])
         })
     };
@@ -364,5 +480,5 @@ pub(super) fn cloud_of(
         steps: xyz.clone(),
     });
     let points = xyz.into_iter().map(local).collect();
-    Ok((bounded_geom::PointCloud::from_local(origin, points)?, exact))
+    Ok((bounded_geom::PointCloud::from_frame(frame, points)?, exact))
 }

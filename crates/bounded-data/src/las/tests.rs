@@ -3,7 +3,6 @@
 use super::layout::*;
 use super::read::*;
 use super::write::*;
-use super::*;
 use crate::records::BLOCK;
 use crate::table::{Column, Endian, PointTable, PositionType, Property, ScalarType};
 use bounded_geom::PointCloud;
@@ -41,7 +40,7 @@ fn sample() -> PointTable {
 }
 
 #[test]
-fn round_trip_las_and_laz_with_codes_and_extra_bytes() {
+fn round_trip_las_and_laz_with_extra_bytes() {
     let t = sample();
     for compressed in [false, true] {
         let bytes = write_bytes(&t, compressed);
@@ -50,10 +49,12 @@ fn round_trip_las_and_laz_with_codes_and_extra_bytes() {
             let (a, b) = (t.cloud.position_f64(i), back.cloud.position_f64(i));
             assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6), "{a:?} {b:?}");
         }
-        let codes = [CODE_NON_EDGE, CODE_SHARP, CODE_BOUNDARY];
+        // A `class` property is Extra Bytes like any other: annotated outputs choose where
+        // the class goes (`annotate::ClassTarget`).
+        assert_eq!(back.property("class"), t.property("class"));
         assert_eq!(
             back.property("classification"),
-            Some(&Column::U8(codes.to_vec()))
+            Some(&Column::U8(vec![0; 3]))
         );
         assert_eq!(back.property("intensity"), t.property("intensity"));
         assert_eq!(back.property("p_sharp"), t.property("p_sharp"));
@@ -202,6 +203,164 @@ fn an_extended_vlr_longer_than_the_file_fails_before_allocating() {
         .to_string();
     let expected = "evlr.las: LAS: extended VLR 0 claims 4294967040 bytes, past the end";
     assert!(msg.starts_with(expected), "{msg}");
+}
+
+/// Where the chunk table of the LAZ `bytes` starts: the first 8 bytes of the point data,
+/// whose offset is the header's u32 at byte 96.
+fn chunk_table_at(bytes: &[u8]) -> usize {
+    let data = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+    i64::from_le_bytes(bytes[data..data + 8].try_into().unwrap()) as usize
+}
+
+#[test]
+fn a_chunk_count_beyond_the_file_fails_before_allocating() {
+    let bytes = write_bytes(&sample(), true);
+    let table = chunk_table_at(&bytes);
+    // Version (u32), then the chunk count (u32): one chunk for 3 points.
+    assert_eq!(bytes[table + 4..table + 8], 1u32.to_le_bytes());
+    // 2^32 - 1 chunks: the laz crate would reserve 68 GB for their table.
+    let mut bad = bytes.clone();
+    bad[table + 4..table + 8].copy_from_slice(&u32::MAX.to_le_bytes());
+    let msg = read_from(Cursor::new(bad), Path::new("chunks.laz"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.starts_with("chunks.laz: LAZ: the chunk table declares 4294967295 chunks, but the"),
+        "{msg}"
+    );
+    // The same when the offset at the start was never written and the crate looks at the end.
+    let mut bad = bytes.clone();
+    let data = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+    bad[data..data + 8].copy_from_slice(&(-1i64).to_le_bytes());
+    bad.extend_from_slice(&(table as i64).to_le_bytes());
+    bad[table + 4..table + 8].copy_from_slice(&u32::MAX.to_le_bytes());
+    let msg = read_from(Cursor::new(bad.clone()), Path::new("chunks.laz"))
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("declares 4294967295 chunks"), "{msg}");
+    // With the right count that file reads.
+    bad[table + 4..table + 8].copy_from_slice(&1u32.to_le_bytes());
+    let back = read_from(Cursor::new(bad), Path::new("chunks.laz")).unwrap();
+    assert_eq!(back.len(), 3);
+}
+
+/// An output that takes `room` bytes, then fails as a full disk does.
+struct FullDisk {
+    data: Cursor<Vec<u8>>,
+    room: u64,
+}
+
+impl std::io::Write for FullDisk {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let left = self.room.saturating_sub(self.data.position()) as usize;
+        if left == 0 && !buf.is_empty() {
+            return Err(std::io::ErrorKind::StorageFull.into());
+        }
+        self.data.write(&buf[..buf.len().min(left)])
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl std::io::Seek for FullDisk {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.data.seek(to)
+    }
+}
+
+#[test]
+fn a_full_disk_is_an_error_in_every_part_of_a_laz_file() {
+    // A small filesystem cannot be made without privileges, so the disk fills up in the
+    // writer's output instead: after the header, within the points, within the chunk table.
+    let n = 60_000;
+    let cloud = PointCloud::from_iter_f64(n, |i| [i as f64 * 0.01, (i % 977) as f64, 0.0]).unwrap();
+    let t = PointTable::new(cloud);
+    let size = write_bytes(&t, true).len() as u64;
+    for compressed in [true, false] {
+        for room in [0, 100, 400, size / 2, size - 10] {
+            let out = FullDisk {
+                data: Cursor::new(Vec::new()),
+                room,
+            };
+            let e = write_to(out, &t.view(), compressed, Path::new("full.laz")).unwrap_err();
+            assert!(
+                matches!(&e, DataError::Io { source, .. }
+                    if source.kind() == std::io::ErrorKind::StorageFull)
+                    || e.to_string().contains("storage full")
+                    || e.to_string().contains("No space"),
+                "{room}: {e}"
+            );
+            assert!(e.to_string().starts_with("full.laz: "), "{e}");
+        }
+    }
+}
+
+/// Where the data of the Extra Bytes VLR of `bytes` starts (its first descriptor).
+fn extra_bytes_descriptors(bytes: &[u8]) -> usize {
+    let user = b"LASF_Spec\0\0\0\0\0\0\0\x04\0";
+    let at = bytes.windows(18).position(|w| w == user).unwrap();
+    // Reserved (2), user id (16), record id (2), length (2), description (32).
+    at - 2 + 54
+}
+
+#[test]
+fn arrays_of_extra_bytes_are_named_columns_and_repeated_names_are_refused() {
+    let n = 4;
+    let cloud = PointCloud::from_iter_f64(n, |i| [i as f64, 0.0, 1.0]).unwrap();
+    let mut t = PointTable::new(cloud);
+    for (k, name) in ["a", "b", "c"].into_iter().enumerate() {
+        let values = (0..n).map(|i| (10 * i + k) as f64 + 0.5).collect();
+        t.set_property(Property::new(name, Column::F64(values)));
+    }
+    for compressed in [false, true] {
+        let bytes = write_bytes(&t, compressed);
+        let d = extra_bytes_descriptors(&bytes);
+        assert_eq!(bytes[d + 2], 10, "descriptor 0 is an f64");
+        // One descriptor of three f64 (code 30, as laspy writes "3f8") named "normal".
+        let mut array = bytes.clone();
+        array[d + 2] = 30;
+        array[d + 4..d + 36].fill(0);
+        array[d + 4..d + 10].copy_from_slice(b"normal");
+        let back = read_from(Cursor::new(array), Path::new("array.las")).unwrap();
+        for (k, old) in ["a", "b", "c"].into_iter().enumerate() {
+            let name = format!("normal_{k}");
+            assert_eq!(back.property(&name), t.property(old), "{name}");
+        }
+        assert!(back.property("extra_8").is_none());
+        // An Extra Bytes field named like a standard field.
+        let mut twice = bytes.clone();
+        twice[d + 4..d + 36].fill(0);
+        twice[d + 4..d + 13].copy_from_slice(b"intensity");
+        let e = read_from(Cursor::new(twice), Path::new("twice.las")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "twice.las: the property name 'intensity' appears twice"
+        );
+    }
+}
+
+#[test]
+fn las_1_4_counts_take_the_64_bit_count() {
+    let n = 5000;
+    let cloud = PointCloud::from_iter_f64(n, |i| [i as f64 * 0.01, (i % 7) as f64, 0.0]).unwrap();
+    let t = PointTable::new(cloud);
+    for compressed in [false, true] {
+        let mut bytes = write_bytes(&t, compressed);
+        // The legacy count at 107 says 200; the 64-bit count at 247 says 5000.
+        assert_eq!(bytes[247..255], (n as u64).to_le_bytes());
+        bytes[107..111].copy_from_slice(&200u32.to_le_bytes());
+        let back = read_from(Cursor::new(bytes.clone()), Path::new("t.las")).unwrap();
+        assert_eq!(back, t, "compressed: {compressed}");
+        // 2^40 points declared, legacy 0: a clear error, nothing allocated for them.
+        bytes[107..111].copy_from_slice(&0u32.to_le_bytes());
+        bytes[247..255].copy_from_slice(&(1u64 << 40).to_le_bytes());
+        let e = read_from(Cursor::new(bytes), Path::new("huge.las")).unwrap_err();
+        let expected = "huge.las: LAS: point data ends within point";
+        assert!(e.to_string().starts_with(expected), "{e}");
+        assert!(e.to_string().contains("of 1099511627776"), "{e}");
+    }
 }
 
 #[test]
@@ -421,9 +580,10 @@ fn files_of_the_las_crate_read_the_same_in_every_format() {
         let mut builder = Builder::from((1, 4));
         builder.point_format = LasFormat::new(id).unwrap();
         builder.point_format.extra_bytes = 6;
-        builder
-            .vlrs
-            .push(extra_bytes_vlr(&[("a".into(), &a), ("b".into(), &b)]));
+        builder.vlrs.push(extra_bytes_vlr(&[
+            extra_field("a", &a, &[]),
+            extra_field("b", &b, &[]),
+        ]));
         let format = builder.point_format;
         let mut writer =
             Writer::new(Cursor::new(Vec::new()), builder.into_header().unwrap()).unwrap();
@@ -445,7 +605,11 @@ fn files_of_the_fast_writer_read_the_same_with_the_las_crate() {
     t.set_property(Property::new("withheld", column([0, 1, 0])));
     t.set_property(Property::new("scanner_channel", column([3, 0, 1])));
     t.set_property(Property::new("gps_time", Column::F64(vec![1.5, -2.0, 1e9])));
-    let extras = [("p_sharp", ScalarType::F32), ("offset", ScalarType::I16)];
+    let extras = [
+        ("class", ScalarType::U8),
+        ("p_sharp", ScalarType::F32),
+        ("offset", ScalarType::I16),
+    ];
     // Format 6 also without return numbers: the header counts them all as return 1.
     for (format, returns) in [(6, true), (6, false), (7, true), (8, true)] {
         let mut t = t.clone();
@@ -482,4 +646,299 @@ fn files_of_the_fast_writer_read_the_same_with_the_las_crate() {
         assert_eq!(back.property("withheld"), t.property("withheld"));
         assert_eq!(back.property("gps_time"), t.property("gps_time"));
     }
+}
+
+/// A LAS 1.4 file written by the las crate: three points on a mm grid at UTM coordinates,
+/// `vlrs` and `evlrs` in its header, and one Extra Byte per point `extra` (described by
+/// the Extra Bytes VLR among `vlrs`, if any).
+fn las_with_records(vlrs: Vec<las::Vlr>, evlrs: Vec<las::Vlr>, extra: &[u8]) -> Vec<u8> {
+    let mut builder = Builder::from((1, 4));
+    builder.point_format = LasFormat::new(6).unwrap();
+    builder.point_format.extra_bytes = if extra.is_empty() { 0 } else { 1 };
+    let t = |offset| Transform {
+        scale: 0.001,
+        offset,
+    };
+    builder.transforms = Vector {
+        x: t(500_000.0),
+        y: t(5_400_000.0),
+        z: t(0.0),
+    };
+    builder.vlrs = vlrs;
+    builder.evlrs = evlrs;
+    let mut writer = Writer::new(Cursor::new(Vec::new()), builder.into_header().unwrap()).unwrap();
+    for i in 0..3 {
+        writer
+            .write_point(las::Point {
+                x: 500_000.0 + f64::from(i),
+                y: 5_400_000.5,
+                z: 100.125 * f64::from(i),
+                classification: las::point::Classification::Ground,
+                gps_time: Some(0.0),
+                extra_bytes: extra.get(i as usize).map(|&b| vec![b]).unwrap_or_default(),
+                ..Default::default()
+            })
+            .unwrap();
+    }
+    writer.into_inner().unwrap().into_inner()
+}
+
+/// The VLRs (header and data, as in the file) by user ID and record ID, then the EVLRs.
+fn raw_records(bytes: &[u8]) -> (Vec<(String, u16, Vec<u8>)>, Vec<(String, u16, Vec<u8>)>) {
+    let u16_at = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
+    let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    let u64_at = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+    let user = |at: usize| {
+        String::from_utf8_lossy(&bytes[at + 2..at + 18])
+            .trim_end_matches('\0')
+            .to_string()
+    };
+    let mut vlrs = Vec::new();
+    let mut at = usize::from(u16_at(94));
+    for _ in 0..u32_at(100) {
+        let len = 54 + usize::from(u16_at(at + 20));
+        vlrs.push((user(at), u16_at(at + 18), bytes[at..at + len].to_vec()));
+        at += len;
+    }
+    let mut evlrs = Vec::new();
+    let mut at = u64_at(235) as usize;
+    for _ in 0..u32_at(243) {
+        let len = 60 + u64_at(at + 20) as usize;
+        evlrs.push((user(at), u16_at(at + 18), bytes[at..at + len].to_vec()));
+        at += len;
+    }
+    (vlrs, evlrs)
+}
+
+/// The OGC WKT of EPSG:32632 (WGS 84 / UTM zone 32N), abridged.
+const WKT_32632: &str = "PROJCS[\"WGS 84 / UTM zone 32N\",GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",\
+    SPHEROID[\"WGS 84\",6378137,298.257223563]],PRIMEM[\"Greenwich\",0],UNIT[\"degree\",\
+    0.0174532925199433]],PROJECTION[\"Transverse_Mercator\"],PARAMETER[\"central_meridian\",9],\
+    PARAMETER[\"scale_factor\",0.9996],PARAMETER[\"false_easting\",500000],UNIT[\"metre\",1],\
+    AUTHORITY[\"EPSG\",\"32632\"]]";
+
+fn vlr(user_id: &str, record_id: u16, description: &str, data: &[u8]) -> las::Vlr {
+    las::Vlr {
+        user_id: user_id.into(),
+        record_id,
+        description: description.into(),
+        data: data.to_vec(),
+    }
+}
+
+#[test]
+fn las_outputs_carry_the_inputs_crs_and_other_records_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let wkt = vlr("LASF_Projection", 2112, "OGC WKT", WKT_32632.as_bytes());
+    let custom = vlr("MyCompany", 42, "survey notes", b"\x00\x01 notes");
+    let evlr = vlr("MyCompany", 43, "big notes", &[7u8; 300]);
+    let input = las_with_records(vec![wkt, custom], vec![evlr], &[]);
+    let (in_vlrs, in_evlrs) = raw_records(&input);
+    let path = dir.path().join("in.las");
+    std::fs::write(&path, &input).unwrap();
+    let table = crate::format::read(&path).unwrap();
+    let classes = [bounded_geom::Class::Sharp; 3];
+    for ext in ["las", "laz"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        crate::format::write_annotated(&out, &table, &classes, &[[0.0, 1.0, 0.0]; 3]).unwrap();
+        let bytes = std::fs::read(&out).unwrap();
+        let (vlrs, evlrs) = raw_records(&bytes);
+        for key in [("LASF_Projection", 2112), ("MyCompany", 42)] {
+            let find = |records: &[(String, u16, Vec<u8>)]| {
+                (records.iter())
+                    .find(|r| (r.0.as_str(), r.1) == key)
+                    .map(|r| r.2.clone())
+            };
+            assert_eq!(find(&vlrs), find(&in_vlrs), "{ext} {key:?}");
+            assert!(find(&vlrs).is_some());
+        }
+        assert_eq!(evlrs, in_evlrs, "{ext}");
+        // The WKT bit (4 of the global encoding) says the CRS is the WKT record.
+        assert_eq!(u16::from_le_bytes([bytes[6], bytes[7]]) & 16, 16, "{ext}");
+        let back = crate::format::read(&out).unwrap();
+        assert_eq!(
+            back.las_header.as_ref().unwrap().vlrs,
+            table.las_header.as_ref().unwrap().vlrs
+        );
+    }
+}
+
+#[test]
+fn a_geotiff_crs_clears_the_wkt_bit_so_readers_take_its_keys() {
+    let keys = vlr(
+        "LASF_Projection",
+        34735,
+        "GeoKeyDirectoryTag",
+        &[1, 0, 1, 0, 0, 0, 0, 0],
+    );
+    let input = las_with_records(vec![keys], Vec::new(), &[]);
+    let table = read_from(Cursor::new(input), Path::new("in.las")).unwrap();
+    let bytes = write_bytes(&table, false);
+    assert_eq!(u16::from_le_bytes([bytes[6], bytes[7]]) & 16, 0);
+    let (vlrs, _) = raw_records(&bytes);
+    assert!(vlrs.iter().any(|r| r.1 == 34735));
+    // Without a CRS, point formats 6 and above set it, as LAS 1.4 requires.
+    let plain = write_bytes(&sample(), false);
+    assert_eq!(u16::from_le_bytes([plain[6], plain[7]]) & 16, 16);
+}
+
+/// An Extra Bytes descriptor of a `u8` named `name`, with no-data 255, scale 0.01 and a
+/// description.
+fn scaled_u8_descriptor(name: &str) -> Vec<u8> {
+    let mut d = vec![0u8; 192];
+    d[2] = 1; // unsigned char
+    d[3] = 0b1_1001; // no-data, scale and offset bits
+    d[4..4 + name.len()].copy_from_slice(name.as_bytes());
+    d[40] = 255;
+    d[112..120].copy_from_slice(&0.01f64.to_le_bytes());
+    d[160..178].copy_from_slice(b"distance to design");
+    d
+}
+
+#[test]
+fn scaled_extra_bytes_read_as_their_values_and_are_written_scaled_again() {
+    let descriptors = vlr(
+        "LASF_Spec",
+        4,
+        "Extra Bytes",
+        &scaled_u8_descriptor("Deviation"),
+    );
+    let input = las_with_records(vec![descriptors], Vec::new(), &[127, 0, 255]);
+    let table = read_from(Cursor::new(input.clone()), Path::new("in.las")).unwrap();
+    let values = [127.0 * 0.01, 0.0, 255.0 * 0.01];
+    assert_eq!(
+        table.property("Deviation"),
+        Some(&Column::F64(values.to_vec()))
+    );
+    assert_eq!(values[0], 1.27);
+    for compressed in [false, true] {
+        let bytes = write_bytes(&table, compressed);
+        let back = read_from(Cursor::new(bytes.clone()), Path::new("out.las")).unwrap();
+        assert_eq!(back.property("Deviation"), table.property("Deviation"));
+        // The same descriptor, and the raw bytes 127, 0, 255 as the las crate reads them.
+        let (vlrs, _) = raw_records(&bytes);
+        let eb = vlrs
+            .iter()
+            .find(|r| r.0 == "LASF_Spec" && r.1 == 4)
+            .unwrap();
+        assert_eq!(eb.2[54..], scaled_u8_descriptor("Deviation")[..]);
+        let mut reader = Reader::new(Cursor::new(bytes)).unwrap();
+        let data = reader.read_all().unwrap();
+        let raw: Vec<u8> = (data.points()).map(|p| p.unwrap().extra_bytes[0]).collect();
+        assert_eq!(raw, [127, 0, 255]);
+    }
+}
+
+#[test]
+fn headers_follow_las_1_4_for_point_formats_6_and_above() {
+    for compressed in [false, true] {
+        let bytes = write_bytes(&sample(), compressed);
+        let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+        // Legacy point count and counts by return: zero; the 64-bit count holds 3.
+        assert_eq!(
+            (107..131).step_by(4).map(u32_at).collect::<Vec<_>>(),
+            [0; 6]
+        );
+        assert_eq!(u64::from_le_bytes(bytes[247..255].try_into().unwrap()), 3);
+        let text = |range: std::ops::Range<usize>| {
+            String::from_utf8_lossy(&bytes[range])
+                .trim_end_matches('\0')
+                .to_string()
+        };
+        assert_eq!(text(26..58), "OTHER");
+        assert_eq!(
+            text(58..90),
+            concat!("BoundED-rs ", env!("CARGO_PKG_VERSION"))
+        );
+        let (day, year) = (
+            u16::from_le_bytes([bytes[90], bytes[91]]),
+            u16::from_le_bytes([bytes[92], bytes[93]]),
+        );
+        assert!((1..=366).contains(&day) && year >= 2024, "{day} {year}");
+    }
+    let from_las = read_from(
+        Cursor::new(write_bytes(&sample(), false)),
+        Path::new("a.las"),
+    )
+    .unwrap();
+    let again = write_bytes(&from_las, false);
+    assert_eq!(String::from_utf8_lossy(&again[26..38]), "MODIFICATION");
+}
+
+/// A single-float table of `points` (origin 0, as read from a float file).
+fn float_table(points: Vec<[f32; 3]>) -> PointTable {
+    let table = PointTable::new(PointCloud::from_local([0.0; 3], points).unwrap());
+    assert_eq!(table.position_type, PositionType::F32);
+    table
+}
+
+/// Positions of `table` as LAS gives them back, and the scale per axis.
+fn through_las(table: &PointTable) -> (Vec<[f64; 3]>, [f64; 3]) {
+    let back = read_from(Cursor::new(write_bytes(table, false)), Path::new("f.las")).unwrap();
+    let PositionType::Scaled { scale, .. } = back.position_type else {
+        panic!("LAS positions are scaled")
+    };
+    let view = back.view();
+    ((0..back.len()).map(|i| view.position(i)).collect(), scale)
+}
+
+#[test]
+fn float_clouds_on_a_binary_grid_come_back_bit_for_bit() {
+    // A room-sized cloud whose coordinates are multiples of 2^-20 (about a micrometre), with
+    // values near zero: 4e8 steps per axis fit.
+    let step = 2f32.powi(-20);
+    let points: Vec<[f32; 3]> = (0..5000)
+        .map(|i: i32| {
+            let v = |k: i32| ((i * k) % 200_000_000 - 100_000_000) as f32 * step;
+            [v(7919), v(104_729) / 1024.0, v(3) / 3.0e6]
+        })
+        .collect();
+    let (back, scale) = through_las(&float_table(points.clone()));
+    for (p, q) in points.iter().zip(&back) {
+        assert_eq!(p.map(f64::from), *q);
+    }
+    assert!(scale.iter().all(|s| s.log2().fract() == 0.0), "{scale:?}");
+}
+
+#[test]
+fn float_clouds_finer_than_a_las_grid_keep_what_it_holds() {
+    // Single floats spread over +-1.5 and down to 1e-7: no grid of 2^32 steps holds them all.
+    let mut state = 12345u64;
+    let mut random = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let points: Vec<[f32; 3]> = (0..20_000)
+        .map(|_| {
+            let magnitude = 10f32.powf(random() * 7.0 - 7.0) * 1.5;
+            std::array::from_fn(|_| {
+                if random() < 0.5 {
+                    -magnitude
+                } else {
+                    magnitude
+                }
+            })
+        })
+        .collect();
+    let (back, scale) = through_las(&float_table(points.clone()));
+    // The finest power of two for which +-1.5 spans at most 2^32 steps: 2^-30.
+    assert_eq!(scale, [2f64.powi(-30); 3]);
+    let (mut exact, mut moved) = (0, 0);
+    for (p, q) in points.iter().zip(&back) {
+        for a in 0..3 {
+            let v = f64::from(p[a]);
+            if (v / scale[a]).fract() == 0.0 {
+                assert_eq!(q[a], v);
+                exact += 1;
+            } else {
+                assert!((q[a] - v).abs() <= scale[a] / 2.0, "{v} {}", q[a]);
+                // Only a coordinate within 2^(k + 23) of zero can be off the grid.
+                assert!(v.abs() < scale[a] * 2f64.powi(23), "{v}");
+                moved += 1;
+            }
+        }
+    }
+    assert!(exact > 0 && moved > 0, "{exact} {moved}");
 }

@@ -1,7 +1,8 @@
 //! Writing: LAS 1.4 records encoded in parallel blocks, LAZ through the `las` crate.
 
+use super::header::{InputHeader, finish};
+use super::las_error;
 use super::layout::*;
-use super::{CODE_BOUNDARY, CODE_NON_EDGE, CODE_SHARP, las_error};
 use crate::DataError;
 use crate::records::{block_len, pipelined};
 use crate::table::{Column, Endian, PositionType, ScalarType, TableView};
@@ -71,6 +72,8 @@ struct Plan<'a> {
     /// The return number bit field (byte, shift, width) when a property fills it, counted
     /// per record for the header; `None` when every record keeps the template's return 1.
     counted_returns: Option<(usize, u8, u8)>,
+    /// The LAS input's header records, carried over.
+    input: Option<&'a InputHeader>,
 }
 
 impl<'a> Plan<'a> {
@@ -87,19 +90,23 @@ impl<'a> Plan<'a> {
         })
         .map_err(|e| las_error(path, e))?;
         let (standard, base_len) = fields(&format);
-        let extras = extra_properties(view, &standard, path)?;
+        let extra_properties = extra_properties(view, &standard, path)?;
         let mut fields: Vec<(Slot, Source<'a>)> = standard
             .iter()
             .filter_map(|&(name, slot)| Some((slot, Source::of(view, name)?)))
             .collect();
+        let input_descriptors = view.las_header.map_or(&[][..], |h| &h.descriptors);
+        let extras: Vec<Extra> = (extra_properties.iter())
+            .map(|(name, column)| extra_field(name, column, input_descriptors))
+            .collect();
         let mut at = base_len;
-        for &(_, column) in &extras {
-            let ty = column.scalar_type();
-            let source = Source {
-                column,
-                conversion: Conversion::None,
+        for (extra, &(_, column)) in extras.iter().zip(&extra_properties) {
+            let conversion = match extra.scaling {
+                Some((scale, offset)) => Conversion::Scaled { scale, offset },
+                None => Conversion::None,
             };
-            fields.push((Slot::Plain { ty, at }, source));
+            let ty = extra.ty;
+            fields.push((Slot::Plain { ty, at }, Source { column, conversion }));
             at += ty.size();
         }
         format.extra_bytes = u16::try_from(at - base_len)
@@ -109,7 +116,10 @@ impl<'a> Plan<'a> {
         builder.version = Version::new(1, 4);
         builder.point_format = format;
         builder.transforms = transforms(view);
-        builder.generating_software = "BoundED-rs".into();
+        builder.generating_software = concat!("BoundED-rs ", env!("CARGO_PKG_VERSION")).into();
+        let input = view.las_header;
+        builder.vlrs = input.map_or_else(Vec::new, |h| h.vlrs.clone());
+        builder.evlrs = input.map_or_else(Vec::new, |h| h.evlrs.clone());
         if !extras.is_empty() {
             builder.vlrs.push(extra_bytes_vlr(&extras));
         }
@@ -138,7 +148,14 @@ impl<'a> Plan<'a> {
             template,
             fields,
             counted_returns: Source::of(view, "return_number").map(|_| (return_at, shift, width)),
+            input,
         })
+    }
+
+    /// Sets the header fields the las crate leaves to the writer (see [`finish`]).
+    fn finish(&self, raw: &mut las::raw::Header) {
+        let vlrs: Vec<&las::Vlr> = self.header.all_vlrs().collect();
+        finish(raw, self.input, &vlrs);
     }
 
     /// Encodes points `first..` into `records` (whole records) and returns their statistics.
@@ -188,20 +205,17 @@ fn extra_properties<'a>(
     standard: &[(&str, Slot)],
     path: &Path,
 ) -> Result<Vec<(String, &'a Column)>, DataError> {
-    let has_class = property(view, "class").is_some();
     let mut extras = Vec::new();
     for p in &view.properties {
-        let standard_name = standard.iter().any(|(n, _)| *n == p.name)
-            || matches!(p.name.as_str(), "class" | "scan_angle_rank");
-        if p.name == "classification" && has_class {
-            extras.push(("input_classification".into(), &p.values));
-        } else if !standard_name {
+        let standard_name =
+            standard.iter().any(|(n, _)| *n == p.name) || p.name == "scan_angle_rank";
+        if !standard_name {
             if p.name.len() > 32 {
                 return Err(invalid(
                     path,
                     format!(
-                        "property name '{}' is longer than the 32 bytes of a LAS Extra Bytes name",
-                        p.name
+                        "property name {} is longer than the 32 bytes of a LAS Extra Bytes name",
+                        crate::error::quoted(&p.name)
                     ),
                 ));
             }
@@ -223,21 +237,21 @@ struct Source<'a> {
 enum Conversion {
     /// None: the value itself (`as` conversion when the types differ).
     None,
-    /// BoundED class to LAS Classification code.
-    ClassCode,
     /// 8-bit colour to LAS's 16 bits.
     Colour,
     /// Legacy scan angle rank (degrees) to LAS 1.4 units of 0.006 degrees.
     ScanAngle,
+    /// A value to the integer it is stored as in a scaled Extra Bytes field.
+    Scaled { scale: f64, offset: f64 },
 }
 
 impl Conversion {
     fn apply(self, value: f64) -> f64 {
         match self {
             Conversion::None => value,
-            Conversion::ClassCode => f64::from(class_code(value as u8)),
             Conversion::Colour => value * 257.0,
             Conversion::ScanAngle => (value / 0.006).round(),
+            Conversion::Scaled { scale, offset } => ((value - offset) / scale).round(),
         }
     }
 }
@@ -248,9 +262,6 @@ impl<'a> Source<'a> {
         let with = |column, conversion| Some(Source { column, conversion });
         let own = property(view, name);
         match (name, own) {
-            ("classification", _) if property(view, "class").is_some() => {
-                with(property(view, "class")?, Conversion::ClassCode)
-            }
             ("scan_angle", None) => with(property(view, "scan_angle_rank")?, Conversion::ScanAngle),
             ("red" | "green" | "blue", Some(c)) if c.scalar_type() == ScalarType::U8 => {
                 with(c, Conversion::Colour)
@@ -260,26 +271,14 @@ impl<'a> Source<'a> {
         }
     }
 
-    /// Writes the values of points `first..` into the field `slot` of `records`: the
-    /// annotated outputs' class codes and 8-bit colours through typed loops, any other
+    /// Writes the values of points `first..` into the field `slot` of `records`: 8-bit
+    /// colours through a typed loop, any other
     /// conversion through `f64`.
     fn encode(self, slot: Slot, first: usize, records: &mut [u8], stride: usize) {
         let n = records.len() / stride;
         match (slot, self.conversion, self.column) {
             (Slot::Plain { ty, at }, Conversion::None, column) if ty == column.scalar_type() => {
                 column.encode_strided(first, records, stride, at, Endian::Little);
-            }
-            (
-                Slot::Plain {
-                    ty: ScalarType::U8,
-                    at,
-                },
-                Conversion::ClassCode,
-                Column::U8(v),
-            ) => {
-                put_each(&v[first..first + n], records, stride, at, |c| {
-                    [CLASS_CODES[usize::from(c)]]
-                });
             }
             (
                 Slot::Plain {
@@ -348,14 +347,11 @@ impl Stats {
         self
     }
 
-    /// The raw form of `header` with these counts and bounds, as the las crate's writer
-    /// sets them (legacy counts too while they fit; return number 0 is not counted).
+    /// The raw form of `header` with these counts and bounds (64-bit counts: see [`finish`]
+    /// for the legacy ones; return number 0 is not counted).
     fn raw_header(&self, header: &Header) -> las::Result<las::raw::Header> {
         let mut raw = header.clone().into_raw()?;
         let by_return: [u64; 15] = std::array::from_fn(|k| self.by_return[k + 1]);
-        raw.number_of_point_records = u32::try_from(self.count).unwrap_or(0);
-        raw.number_of_points_by_return =
-            std::array::from_fn(|k| u32::try_from(by_return[k]).unwrap_or(0));
         raw.large_file = Some(LargeFile {
             number_of_point_records: self.count,
             number_of_points_by_return: by_return,
@@ -406,8 +402,9 @@ fn encode_blocks(
     Ok(stats)
 }
 
-/// Writes uncompressed LAS: header and VLRs, the records, then the header again with the
-/// counts and bounds of the records (same size, so it overwrites the first one exactly).
+/// Writes uncompressed LAS: header and VLRs, the records, the EVLRs, then the header again
+/// with the counts and bounds of the records (same size, so it overwrites the first one
+/// exactly).
 fn write_las<W: Write + Seek + Send>(
     mut out: W,
     view: &TableView<'_>,
@@ -421,7 +418,16 @@ fn write_las<W: Write + Seek + Send>(
     let stats = encode_blocks(view, plan, path, block_len, |block| {
         out.write_all(block).map_err(io)
     })?;
-    let raw = stats.raw_header(&plan.header).map_err(las)?;
+    let start_of_evlrs = out.stream_position().map_err(io)?;
+    for evlr in plan.header.evlrs() {
+        let raw = evlr.clone().into_raw(true).map_err(las)?;
+        raw.write_to(&mut out).map_err(las)?;
+    }
+    let mut raw = stats.raw_header(&plan.header).map_err(las)?;
+    if let Some(evlr) = raw.evlr.as_mut() {
+        evlr.start_of_first_evlr = start_of_evlrs;
+    }
+    plan.finish(&mut raw);
     out.rewind().map_err(io)?;
     raw.write_to(&mut out).map_err(las)?;
     out.seek(SeekFrom::End(0)).map_err(io)?;
@@ -429,7 +435,7 @@ fn write_las<W: Write + Seek + Send>(
 }
 
 /// Writes LAZ through the las crate's writer, which compresses the records (chunks in
-/// parallel) and counts them.
+/// parallel) and counts them, then the header again with the fields it leaves out.
 fn write_laz<W: Write + Seek + Send + Sync + 'static>(
     out: W,
     view: &TableView<'_>,
@@ -438,6 +444,10 @@ fn write_laz<W: Write + Seek + Send + Sync + 'static>(
 ) -> Result<W, DataError> {
     let las = |e| las_error(path, e);
     let options = WriterOptions::default().with_laz_parallelism(LazParallelism::Yes);
+    let out = FailOnce {
+        inner: out,
+        failed: false,
+    };
     let mut writer = Writer::with_options(out, plan.header.clone(), options).map_err(las)?;
     encode_blocks(view, plan, path, laz_block_len(plan.record_len), |block| {
         let data = PointDataBuilder::new()
@@ -447,35 +457,145 @@ fn write_laz<W: Write + Seek + Send + Sync + 'static>(
         writer.write_points(&data).map_err(las)
     })?;
     writer.close().map_err(las)?;
-    writer.into_inner().map_err(las)
+    let mut raw = writer.header().clone().into_raw().map_err(las)?;
+    plan.finish(&mut raw);
+    let mut out = writer.into_inner().map_err(las)?.inner;
+    let io = |e| DataError::io(path, e);
+    out.rewind().map_err(io)?;
+    raw.write_to(&mut out).map_err(las)?;
+    out.seek(SeekFrom::End(0)).map_err(io)?;
+    Ok(out)
 }
 
-/// The input's scale and offset, or for other clouds the bounding-box centre as offset and
-/// the smallest power-of-ten scale not finer than a thousandth of the `f32` resolution.
+/// The las writer's output: after its first I/O error (a full disk), every later operation
+/// does nothing and succeeds. The first error reaches the caller through the writer as
+/// usual; without this, dropping the writer after it (it finishes the file when dropped)
+/// failed again and panicked.
+struct FailOnce<W> {
+    inner: W,
+    failed: bool,
+}
+
+impl<W> FailOnce<W> {
+    fn watch<T>(
+        &mut self,
+        done: T,
+        op: impl FnOnce(&mut W) -> std::io::Result<T>,
+    ) -> std::io::Result<T> {
+        if self.failed {
+            return Ok(done);
+        }
+        op(&mut self.inner).inspect_err(|_| self.failed = true)
+    }
+}
+
+impl<W: Write> Write for FailOnce<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.watch(buf.len(), |w| w.write(buf))
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.watch((), |w| w.flush())
+    }
+}
+
+impl<W: Seek> Seek for FailOnce<W> {
+    fn seek(&mut self, to: SeekFrom) -> std::io::Result<u64> {
+        self.watch(0, |w| w.seek(to))
+    }
+}
+
+/// The input's scale and offset; for single-float clouds [`binary_grid`]; for other clouds
+/// the bounding-box centre as offset and the smallest power-of-ten scale not finer than a
+/// thousandth of the `f32` resolution.
 pub(super) fn transforms(view: &TableView<'_>) -> Vector<Transform> {
-    let (scale, offset) = match view.position_type {
-        PositionType::Scaled { scale, offset } => (scale, offset),
-        _ => {
+    let t: [Transform; 3] = match view.position_type {
+        PositionType::Scaled { scale, offset } => std::array::from_fn(|a| Transform {
+            scale: scale[a],
+            offset: offset[a],
+        }),
+        PositionType::F32 => binary_grid(view),
+        PositionType::F64 => {
             let extent = view
                 .cloud
                 .points()
                 .par_iter()
                 .map(|p| p.map(f32::abs).into_iter().fold(0f32, f32::max))
                 .reduce(|| 0f32, f32::max);
+            let extent = f64::from(extent) * view.cloud.scale();
             // i32 covers +-2.1e9 steps: keep the largest offset below 1e9 steps.
-            let exponent = (f64::from(extent).max(1e-3) / 1e9).log10().ceil();
+            let exponent = (extent.max(1e-3) / 1e9).log10().ceil();
             let s = 10f64.powf(exponent.max(-9.0));
-            ([s; 3], view.cloud.origin())
+            let origin = view.cloud.origin();
+            std::array::from_fn(|a| Transform {
+                scale: s,
+                offset: origin[a],
+            })
         }
     };
-    let t = |a: usize| Transform {
-        scale: scale[a],
-        offset: offset[a],
+    let [x, y, z] = t;
+    Vector { x, y, z }
+}
+
+/// Steps per axis that a LAS integer holds with room to spare: the offset sits mid-range.
+const MAX_STEPS: f64 = 2_147_483_000.0;
+
+/// Per axis, a power-of-two scale `2^k` and an offset that is a multiple of it: the coarsest
+/// `k` on whose grid every coordinate lies (so every coordinate is written exactly) when
+/// the axis then spans at most about 2^32 steps, else the finest `k` for which it does. On
+/// that finer grid a coordinate is still exact when it is a multiple of `2^k`, which every
+/// single float at least `2^(k + 23)` from zero is; the others move by at most half a step.
+fn binary_grid(view: &TableView<'_>) -> [Transform; 3] {
+    // Per axis: smallest, largest, and the exponent of the lowest set bit over the
+    // non-zero coordinates.
+    type Axis = (f64, f64, i32);
+    let empty: [Axis; 3] = [(f64::INFINITY, f64::NEG_INFINITY, i32::MAX); 3];
+    let merge = |a: [Axis; 3], b: [Axis; 3]| {
+        std::array::from_fn(|k| (a[k].0.min(b[k].0), a[k].1.max(b[k].1), a[k].2.min(b[k].2)))
     };
-    Vector {
-        x: t(0),
-        y: t(1),
-        z: t(2),
+    let axes = (0..view.len())
+        .into_par_iter()
+        .map(|i| {
+            let p = view.position(i);
+            std::array::from_fn(|a| (p[a], p[a], lowest_bit(p[a])))
+        })
+        .reduce(|| empty, merge);
+    axes.map(|(lo, hi, lowest)| {
+        if lo > hi {
+            return Transform {
+                scale: 1.0,
+                offset: 0.0,
+            }; // no points
+        }
+        let mut k = if lowest == i32::MAX { 0 } else { lowest };
+        // The range alone bounds `k` from below; start there rather than at a tiny `k`.
+        let needed = ((hi - lo) / 2.0 / MAX_STEPS).log2().ceil();
+        if needed.is_finite() && f64::from(k) < needed {
+            k = needed as i32;
+        }
+        loop {
+            let scale = 2f64.powi(k);
+            let offset = ((lo + hi) / 2.0 / scale).round() * scale;
+            if (hi - offset).max(offset - lo) / scale <= MAX_STEPS {
+                return Transform { scale, offset };
+            }
+            k += 1;
+        }
+    })
+}
+
+/// The exponent of the lowest set bit of `x` (`x` is an odd multiple of `2^e`); `i32::MAX`
+/// for zero and non-finite values, which constrain no grid.
+fn lowest_bit(x: f64) -> i32 {
+    if x == 0.0 || !x.is_finite() {
+        return i32::MAX;
+    }
+    let bits = x.to_bits();
+    let exponent = ((bits >> 52) & 0x7ff) as i32;
+    let mantissa = bits & ((1 << 52) - 1);
+    match exponent {
+        0 => mantissa.trailing_zeros() as i32 - 1074,
+        _ => (mantissa | 1 << 52).trailing_zeros() as i32 + exponent - 1075,
     }
 }
 
@@ -492,7 +612,7 @@ fn encode_positions(
 ) -> Result<([i32; 3], [i32; 3]), String> {
     const RUN: usize = 256;
     let axes = [t.x, t.y, t.z];
-    let origin = view.cloud.origin();
+    let (origin, unit) = (view.cloud.origin(), view.cloud.scale());
     let n = records.len() / stride;
     let points = &view.cloud.points()[first..first + n];
     let (mut min, mut max) = ([i32::MAX; 3], [i32::MIN; 3]);
@@ -514,7 +634,7 @@ fn encode_positions(
                 }
                 None => {
                     for (s, p) in steps.iter_mut().zip(points) {
-                        *s = (o + f64::from(p[a]) - offset) / scale;
+                        *s = (o + unit * f64::from(p[a]) - offset) / scale;
                     }
                 }
             }
@@ -552,24 +672,3 @@ pub(super) fn round_i32(x: f64) -> Option<i32> {
     };
     i32::try_from(rounded).ok()
 }
-
-/// LAS Classification code of a BoundED class code; other values pass through.
-const fn class_code(class: u8) -> u8 {
-    match class {
-        0 => CODE_NON_EDGE,
-        1 => CODE_SHARP,
-        2 => CODE_BOUNDARY,
-        other => other,
-    }
-}
-
-/// [`class_code`] of every `u8`, for a table look-up per point.
-const CLASS_CODES: [u8; 256] = {
-    let mut codes = [0u8; 256];
-    let mut class = 0;
-    while class < 256 {
-        codes[class] = class_code(class as u8);
-        class += 1;
-    }
-    codes
-};

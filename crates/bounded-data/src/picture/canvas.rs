@@ -113,7 +113,7 @@ impl Canvas {
             path: path.to_path_buf(),
             source,
         };
-        crate::format::write_atomic(path, |file| {
+        bounded_geom::atomic::write_with(path, |file| {
             let mut out = BufWriter::new(file);
             let mut encoder = png::Encoder::new(&mut out, self.width as u32, self.height as u32);
             encoder.set_color(png::ColorType::Rgb);

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# End-to-end tests of the outputs with the real readers (laspy + lazrs, meshio, Open3D,
+# plyfile, pymeshlab, pye57, pypcd4): creates a virtual environment (VENV, default
+# target/venv-interop), installs the pinned requirements and runs pytest on the binary
+# BOUNDED_BIN (default target/debug/bounded, relative to the repository root; build it
+# first). Fails when pytest collects no test (its exit code 5).
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+repo="$(cd "$here/../.." && pwd)"
+venv="${VENV:-$repo/target/venv-interop}"
+if [ ! -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv"
+fi
+"$venv/bin/pip" install --quiet -r "$here/requirements.txt"
+# Open3D's wheel links libusb; Debian packages it apart.
+if ! "$venv/bin/python" -c "import open3d" 2>/dev/null; then
+    if ldconfig -p | grep -q "libusb-1.0.so.0"; then
+        "$venv/bin/python" -c "import open3d"  # some other failure: show it
+    fi
+    echo "installing libusb-1.0-0 for open3d" >&2
+    apt-get update -qq && apt-get install -y -qq libusb-1.0-0 >/dev/null
+fi
+cd "$repo"
+status=0
+"$venv/bin/python" -m pytest -q "$here" "$@" || status=$?
+if [ "$status" -eq 5 ]; then
+    echo "pytest collected no test" >&2
+    exit 1
+fi
+exit "$status"
