@@ -27,7 +27,12 @@ fn temporaries(dir: &Path) -> Vec<String> {
 fn interrupt_while_writing(input: &Path, output: &Path, signal: &str) -> Option<i32> {
     let dir = output.parent().unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_bounded"))
-        .args(["detect".as_ref(), input.as_os_str(), "-o".as_ref(), output.as_os_str()])
+        .args([
+            "detect".as_ref(),
+            input.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+        ])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()

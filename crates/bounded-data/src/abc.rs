@@ -94,7 +94,9 @@ fn read_obj(path: &Path) -> Result<ObjMesh, DataError> {
                         .parse::<f64>()
                         .ok()
                         .filter(|x| x.is_finite())
-                        .ok_or_else(|| bad(format!("bad coordinate {}", crate::error::quoted(token))))?;
+                        .ok_or_else(|| {
+                            bad(format!("bad coordinate {}", crate::error::quoted(token)))
+                        })?;
                 }
                 vertices.push(p);
             }
@@ -273,7 +275,10 @@ impl CurveParser<'_> {
                         other => {
                             return Err(self.error(
                                 line.number,
-                                format!("`sharp` must be true or false, got {}", crate::error::quoted(other)),
+                                format!(
+                                    "`sharp` must be true or false, got {}",
+                                    crate::error::quoted(other)
+                                ),
                             ));
                         }
                     };
@@ -287,7 +292,10 @@ impl CurveParser<'_> {
                             .ok_or_else(|| {
                                 self.error(
                                     line.number,
-                                    format!("expected a list `[...]`, got {}", crate::error::quoted(value)),
+                                    format!(
+                                        "expected a list `[...]`, got {}",
+                                        crate::error::quoted(value)
+                                    ),
                                 )
                             })?;
                         for token in list.split(',').map(str::trim).filter(|t| !t.is_empty()) {
@@ -313,9 +321,12 @@ impl CurveParser<'_> {
     }
 
     fn index(&self, token: &str, number: usize) -> Result<usize, DataError> {
-        token
-            .parse()
-            .map_err(|_| self.error(number, format!("bad vertex index {}", crate::error::quoted(token))))
+        token.parse().map_err(|_| {
+            self.error(
+                number,
+                format!("bad vertex index {}", crate::error::quoted(token)),
+            )
+        })
     }
 }
 

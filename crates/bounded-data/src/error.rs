@@ -137,10 +137,16 @@ mod tests {
         let messages = [
             crate::ply::read_from(ply.as_bytes(), Path::new("e.ply")).unwrap_err(),
             crate::pcd::read_from(pcd.as_bytes(), Path::new("e.pcd")).unwrap_err(),
-            crate::xyz::read_from(format!("1 2 3\n1 2 {evil}\n").as_bytes(), Path::new("e.xyz"))
-                .unwrap_err(),
-            crate::xyz::read_from(format!("a b c {evil}\n1 2 3\n").as_bytes(), Path::new("e.xyz"))
-                .unwrap_err(),
+            crate::xyz::read_from(
+                format!("1 2 3\n1 2 {evil}\n").as_bytes(),
+                Path::new("e.xyz"),
+            )
+            .unwrap_err(),
+            crate::xyz::read_from(
+                format!("a b c {evil}\n1 2 3\n").as_bytes(),
+                Path::new("e.xyz"),
+            )
+            .unwrap_err(),
         ]
         .map(|e| e.to_string());
         for m in messages {

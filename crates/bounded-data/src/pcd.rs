@@ -74,7 +74,10 @@ fn parse_header(input: &mut impl BufRead, path: &Path) -> Result<Header, DataErr
         bytes += n as u64;
         let line = String::from_utf8_lossy(&buf);
         let bad = |what: &str| {
-            DataError::malformed(path, format!("header line {lines}: {what}: {}", quoted(&line)))
+            DataError::malformed(
+                path,
+                format!("header line {lines}: {what}: {}", quoted(&line)),
+            )
         };
         let number = |w: &str| w.parse::<usize>().map_err(|_| bad("not a count"));
         let mut words = line.split_ascii_whitespace();

@@ -327,7 +327,10 @@ fn push_parsed<T: Scalar>(v: &mut Vec<T>, token: &str, ty: ScalarType) -> Result
                 v.push(T::from_f64(f));
                 Ok(())
             }
-            _ => Err(format!("{} is not a valid {ty:?} value", crate::error::quoted(token))),
+            _ => Err(format!(
+                "{} is not a valid {ty:?} value",
+                crate::error::quoted(token)
+            )),
         },
     }
 }
@@ -637,7 +640,10 @@ pub(crate) fn check_names<'a>(
         if coordinate || !seen.insert(name) {
             return Err(crate::DataError::malformed(
                 path,
-                format!("the property name {} appears twice", crate::error::quoted(name)),
+                format!(
+                    "the property name {} appears twice",
+                    crate::error::quoted(name)
+                ),
             ));
         }
     }

@@ -51,7 +51,8 @@ fn clouds_scaled_by_powers_of_four_have_the_same_features_bit_for_bit() {
         // The same offsets, in a frame scaled by `s`: the same positions, scaled.
         let cloud = PointCloud::from_f64(&scaled).unwrap();
         assert!(
-            (0..points.len()).all(|i| cloud.position_f64(i) == unscaled.position_f64(i).map(|c| c * s)),
+            (0..points.len())
+                .all(|i| cloud.position_f64(i) == unscaled.position_f64(i).map(|c| c * s)),
             "2^{exponent}"
         );
         assert!(features(&scaled) == reference, "2^{exponent}");
@@ -76,7 +77,10 @@ fn a_far_outlier_changes_no_other_point_s_features() {
     // at the origin.
     for (object, outlier) in [
         (cube(3000, 1.0, [0.0; 3], 2), [1e7, 0.0, 0.0]),
-        (cube(3000, 10.0, [500_000.0, 5_403_150.0, 300.0], 3), [0.0; 3]),
+        (
+            cube(3000, 10.0, [500_000.0, 5_403_150.0, 300.0], 3),
+            [0.0; 3],
+        ),
     ] {
         let alone = features(&object);
         let mut with = object.clone();

@@ -215,10 +215,9 @@ impl Temporary {
             let stamp = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos() as u64);
-            let unique = mix(
-                stamp ^ u64::from(std::process::id()) << 32
-                    ^ COUNTER.fetch_add(1, Ordering::Relaxed),
-            );
+            let unique = mix(stamp
+                ^ u64::from(std::process::id()) << 32
+                ^ COUNTER.fetch_add(1, Ordering::Relaxed));
             let path = dir.join(format!("{PREFIX}{unique:016x}{SUFFIX}"));
             // The lock is held while the file is created: a concurrent
             // `remove_temporaries` sees it created and listed, or neither.
@@ -327,7 +326,9 @@ mod tests {
         assert_eq!(entries(dir.path()), ["out.bin"]);
         // A panic in the writer removes the temporary file too.
         let panicked = std::panic::catch_unwind(|| {
-            write_with(&path, |_| -> Result<(), WriteError> { panic!("writer bug") })
+            write_with(&path, |_| -> Result<(), WriteError> {
+                panic!("writer bug")
+            })
         });
         assert!(panicked.is_err());
         assert_eq!(entries(dir.path()), ["out.bin"]);
@@ -356,7 +357,10 @@ mod tests {
             let fifo = dir.path().join("fifo");
             mknodat(CWD, &fifo, FileType::Fifo, Mode::RUSR | Mode::WUSR, 0).unwrap();
             let e = write(&fifo, b"x").unwrap_err();
-            assert!(e.to_string().contains("is a FIFO, not a regular file"), "{e}");
+            assert!(
+                e.to_string().contains("is a FIFO, not a regular file"),
+                "{e}"
+            );
             let meta = std::fs::symlink_metadata(&fifo).unwrap();
             use std::os::unix::fs::FileTypeExt;
             assert!(meta.file_type().is_fifo());
@@ -407,7 +411,12 @@ mod tests {
     #[test]
     fn stale_temporaries_are_the_unlisted_ones() {
         let dir = tempfile::tempdir().unwrap();
-        for name in [".bounded-1234.part", ".bounded-.part", "bounded-1.part", "x.part"] {
+        for name in [
+            ".bounded-1234.part",
+            ".bounded-.part",
+            "bounded-1.part",
+            "x.part",
+        ] {
             std::fs::write(dir.path().join(name), b"").unwrap();
         }
         let stale = [dir.path().join(".bounded-1234.part")];
@@ -419,6 +428,9 @@ mod tests {
             Ok(())
         })
         .unwrap();
-        assert_eq!(stale_temporaries(&dir.path().join("none")), Vec::<PathBuf>::new());
+        assert_eq!(
+            stale_temporaries(&dir.path().join("none")),
+            Vec::<PathBuf>::new()
+        );
     }
 }

@@ -334,7 +334,10 @@ mod tests {
         assert_eq!(cloud.origin(), [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a])));
         assert_eq!(cloud.scale(), 1.0);
         for (i, p) in points.iter().enumerate() {
-            assert_eq!(cloud.points()[i], [0, 1, 2].map(|a| (p[a] - cloud.origin()[a]) as f32));
+            assert_eq!(
+                cloud.points()[i],
+                [0, 1, 2].map(|a| (p[a] - cloud.origin()[a]) as f32)
+            );
         }
         // Clouds near the edges of the safe range of the largest offset too (about half
         // the extent here).
@@ -389,7 +392,10 @@ mod tests {
         let mut near = cube.clone();
         near.push([300.0, 0.0, 0.0]);
         let lo = cube.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
-        assert_eq!(PointCloud::from_f64(&near).unwrap().origin()[0], 0.5 * (lo + 300.0));
+        assert_eq!(
+            PointCloud::from_f64(&near).unwrap().origin()[0],
+            0.5 * (lo + 300.0)
+        );
     }
 
     #[test]

@@ -11,7 +11,12 @@ use std::os::unix::fs::PermissionsExt;
 fn new_files_get_0666_less_the_umask() {
     let dir = tempfile::tempdir().unwrap();
     let mode = |p: &std::path::Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
-    for (mask, expected) in [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664), (0o027, 0o640)] {
+    for (mask, expected) in [
+        (0o022, 0o644),
+        (0o077, 0o600),
+        (0o002, 0o664),
+        (0o027, 0o640),
+    ] {
         umask(Mode::from_bits_truncate(mask));
         let path = dir.path().join(format!("new-{mask:o}"));
         write(&path, b"x").unwrap();

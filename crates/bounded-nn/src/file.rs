@@ -240,7 +240,10 @@ impl ModelFile {
     /// Writes the file to `path`, atomically ([`bounded_geom::atomic`]: a failed or
     /// interrupted write leaves any previous file in place and no partial one).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), NnError> {
-        Ok(bounded_geom::atomic::write(path.as_ref(), &self.to_bytes()?)?)
+        Ok(bounded_geom::atomic::write(
+            path.as_ref(),
+            &self.to_bytes()?,
+        )?)
     }
 
     /// Reads and validates the file at `path`.
@@ -406,7 +409,10 @@ pub(crate) mod tests {
             file.model.fusion_widths[0] = width;
             let e = ModelFile::from_bytes(&file.to_bytes().unwrap()).unwrap_err();
             assert!(
-                matches!(&e, NnError::InconsistentModel(_) | NnError::InvalidConfig(_)),
+                matches!(
+                    &e,
+                    NnError::InconsistentModel(_) | NnError::InvalidConfig(_)
+                ),
                 "{scales} x {features}, width {width}: {e}"
             );
         }

@@ -94,7 +94,11 @@ impl ModelConfig {
         let (mut nodes, mut width, mut level) = (self.n_scales, self.features_per_scale, 0);
         while nodes > 1 {
             let out = self.fusion_width(level);
-            if width.checked_mul(2).and_then(|d| d.checked_mul(out)).is_none() {
+            if width
+                .checked_mul(2)
+                .and_then(|d| d.checked_mul(out))
+                .is_none()
+            {
                 return too_large();
             }
             (nodes, width, level) = (nodes / 2, out, level + 1);

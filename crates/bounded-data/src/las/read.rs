@@ -194,7 +194,10 @@ fn check_chunk_table(
 /// The 8 bytes at `at`, if the file holds them.
 fn word_at(input: &mut (impl Read + Seek), at: SeekFrom) -> Option<[u8; 8]> {
     let mut word = [0u8; 8];
-    input.seek(at).and_then(|_| input.read_exact(&mut word)).ok()?;
+    input
+        .seek(at)
+        .and_then(|_| input.read_exact(&mut word))
+        .ok()?;
     Some(word)
 }
 

@@ -464,7 +464,11 @@ struct FailOnce<W> {
 }
 
 impl<W> FailOnce<W> {
-    fn watch<T>(&mut self, done: T, op: impl FnOnce(&mut W) -> std::io::Result<T>) -> std::io::Result<T> {
+    fn watch<T>(
+        &mut self,
+        done: T,
+        op: impl FnOnce(&mut W) -> std::io::Result<T>,
+    ) -> std::io::Result<T> {
         if self.failed {
             return Ok(done);
         }
