@@ -528,7 +528,7 @@ surfaces:
             (
                 OPEN_BOX.into(),
                 "curves:\n- sharp: true\n  vert_indices: [0, a]\n",
-                "line 3: bad vertex index \"a\"",
+                "line 3: bad vertex index 'a'",
             ),
             (
                 OPEN_BOX.into(),

@@ -562,7 +562,7 @@ mod tests {
             ),
             (
                 head.replace("TYPE F F F", "TYPE F F Q") + "DATA ascii\n",
-                "unsupported TYPE Q",
+                "unsupported TYPE 'Q'",
             ),
             (
                 head.replace("POINTS 2", "POINTS 3") + "DATA ascii\n",

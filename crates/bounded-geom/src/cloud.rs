@@ -313,6 +313,91 @@ mod tests {
         assert!((c.position_f64(1)[0] - 5_403_150.001).abs() < 1e-6);
     }
 
+    /// `n` points of the unit cube, pseudo-random.
+    fn unit_cube(n: usize) -> Vec<[f64; 3]> {
+        let mut next = crate::test_stream(7);
+        (0..n)
+            .map(|_| [0; 3].map(|_| (next() >> 11) as f64 / (1u64 << 53) as f64))
+            .collect()
+    }
+
+    #[test]
+    fn ordinary_clouds_keep_the_bounding_box_centre_and_scale_1() {
+        let points = unit_cube(1000);
+        let cloud = PointCloud::from_f64(&points).unwrap();
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in &points {
+            for a in 0..3 {
+                (lo[a], hi[a]) = (lo[a].min(p[a]), hi[a].max(p[a]));
+            }
+        }
+        assert_eq!(cloud.origin(), [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a])));
+        assert_eq!(cloud.scale(), 1.0);
+        for (i, p) in points.iter().enumerate() {
+            assert_eq!(
+                cloud.points()[i],
+                [0, 1, 2].map(|a| (p[a] - cloud.origin()[a]) as f32)
+            );
+        }
+        // Clouds near the edges of the safe range of the largest offset too (about half
+        // the extent here).
+        for s in [2f64.powi(-28), 2f64.powi(30)] {
+            let scaled: Vec<_> = points.iter().map(|p| p.map(|c| c * s)).collect();
+            assert_eq!(PointCloud::from_f64(&scaled).unwrap().scale(), 1.0);
+        }
+    }
+
+    #[test]
+    fn extreme_extents_get_a_power_of_four_scale() {
+        let points = unit_cube(100);
+        // The largest offset is about half the extent: 5e38 = 1.47 x 4^64, 5e-31 = 2.5 x 4^-51.
+        for (s, expected) in [(1e39, 2f64.powi(128)), (1e-30, 2f64.powi(-102))] {
+            let scaled: Vec<_> = points.iter().map(|p| p.map(|c| c * s)).collect();
+            let cloud = PointCloud::from_f64(&scaled).unwrap();
+            assert_eq!(cloud.scale(), expected, "{s}");
+            let magnitude = (cloud.points().iter().flatten()).fold(0f32, |m, c| m.max(c.abs()));
+            assert!((1.0..4.0).contains(&magnitude), "{s}: {magnitude}");
+            for (i, p) in scaled.iter().enumerate() {
+                let back = cloud.position_f64(i);
+                assert!((0..3).all(|a| (back[a] - p[a]).abs() <= 1e-7 * s), "{s}");
+            }
+        }
+        // f32 coordinates beyond the safe range are scaled exactly.
+        let big = vec![[3e38f32, -3e38, 1e30], [1e38, 0.0, -1e38]];
+        let cloud = PointCloud::from_local([0.0; 3], big.clone()).unwrap();
+        assert!(cloud.scale() > 1.0);
+        for (i, p) in big.iter().enumerate() {
+            assert_eq!(cloud.position_f64(i), p.map(f64::from));
+        }
+    }
+
+    #[test]
+    fn far_outliers_leave_the_bulk_its_offsets() {
+        let cube = unit_cube(5000);
+        let alone = PointCloud::from_f64(&cube).unwrap();
+        for outlier in [[1e7, 0.0, 0.0], [-3e9, 2e9, 1e9], [0.0, 0.0, 1e4]] {
+            let mut with = cube.clone();
+            with.insert(17, outlier);
+            let cloud = PointCloud::from_f64(&with).unwrap();
+            assert_eq!(cloud.origin(), alone.origin(), "{outlier:?}");
+            // The same offsets, but for the power of four of an extent beyond 2^30 (3e9).
+            let bulk: Vec<_> = (alone.points().iter())
+                .map(|p| p.map(|c| (f64::from(c) / cloud.scale()) as f32))
+                .collect();
+            assert_eq!(&cloud.points()[..17], &bulk[..17]);
+            assert_eq!(&cloud.points()[18..], &bulk[17..]);
+            assert!(crate::Distinct::of(&cloud).is_none(), "no position merged");
+        }
+        // An outlier within 2^10 times the bulk's spread moves nothing.
+        let mut near = cube.clone();
+        near.push([300.0, 0.0, 0.0]);
+        let lo = cube.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
+        assert_eq!(
+            PointCloud::from_f64(&near).unwrap().origin()[0],
+            0.5 * (lo + 300.0)
+        );
+    }
+
     #[test]
     fn rejects_empty_and_non_finite() {
         assert_eq!(PointCloud::from_f64(&[]), Err(GeomError::Empty));

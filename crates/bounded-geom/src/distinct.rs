@@ -25,8 +25,11 @@ impl Distinct {
     /// The distinct positions of `cloud`, or `None` when no position repeats (then nothing
     /// is allocated beyond the check).
     ///
-    /// Positions are equal when the cloud's coordinates are (`-0.0` equals `0.0`). Costs a
-    /// parallel sort of 16 bytes per point, freed before it returns.
+    /// Positions are equal when the cloud's stored `f32` offsets are (`-0.0` equals `0.0`):
+    /// exact repeats always are, and distinct positions are merged only when they are closer
+    /// than the cloud's `f32` resolution, about 2^-24 of their distance from its origin
+    /// (see [`PointCloud`]: far outliers do not coarsen it for the bulk of the points).
+    /// Costs a parallel sort of 16 bytes per point, freed before it returns.
     pub fn of(cloud: &PointCloud) -> Option<Self> {
         let points = cloud.points();
         if u32::try_from(points.len()).is_err() {

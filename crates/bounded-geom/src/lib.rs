@@ -2,7 +2,12 @@
 //!
 //! [`PointCloud`] keeps the original coordinates' origin in `f64` and the points
 //! re-centred in `f32`, so clouds in UTM coordinates (5,403,150 m, where `f32`
-//! alone resolves only 0.5 m) keep millimetre precision.
+//! alone resolves only 0.5 m) keep millimetre precision. Its [`Frame`] also scales the
+//! offsets by an exact power of four when the cloud's extent lies outside `[2^-30, 2^30]`
+//! (so that squared `f32` distances neither overflow nor underflow, and the scale-invariant
+//! features stay bit for bit the same), and centres them on the bulk of the points when a
+//! few far outliers would otherwise cost the bulk its precision. Ordinary clouds get the
+//! bounding-box centre and scale 1.
 //!
 //! [`KnnIndex`] answers one exact k-nearest-neighbour query per point, in Morton
 //! order and in chunks, so memory stays `O(chunk x k)` (plus 16 bytes per point for

