@@ -77,7 +77,9 @@ def cli_detect(binary, cloud_path, out_path, *options):
     """The CLI's classes and probabilities for the cloud file `cloud_path`."""
     run_cli(binary, "detect", cloud_path, "-o", out_path, *options)
     _, fields = bounded.read(out_path)
+    # PLY and text outputs name the results for CloudCompare (`scalar_class`, ...).
+    field = lambda name: fields[name] if name in fields else fields["scalar_" + name]
     probabilities = np.column_stack(
-        [fields["p_nonedge"], fields["p_sharp"], fields["p_boundary"]]
+        [field("p_nonedge"), field("p_sharp"), field("p_boundary")]
     )
-    return fields["class"], probabilities
+    return field("class"), probabilities
