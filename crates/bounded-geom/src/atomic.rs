@@ -66,11 +66,7 @@ pub fn write_with<E: From<WriteError>>(
         source,
     };
     let mode = replaced_mode(path).map_err(fail)?;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = Temporary::create(dir).map_err(fail)?;
+    let mut tmp = Temporary::create(directory(path)).map_err(fail)?;
     fill(&mut tmp.file)?;
     tmp.file.flush().map_err(fail)?;
     #[cfg(unix)]
@@ -88,6 +84,18 @@ pub fn write_with<E: From<WriteError>>(
     }
     // After an exchange the temporary path names the previous file, which dropping removes.
     Ok(())
+}
+
+/// Checks, before any work, that [`write_with`] could write `path` now: its directory takes a
+/// temporary file (created and removed at once) and nothing but a regular file or a symbolic
+/// link is there.
+pub fn probe(path: &Path) -> Result<(), WriteError> {
+    let fail = |source| WriteError {
+        path: path.to_path_buf(),
+        source,
+    };
+    replaced_mode(path).map_err(fail)?;
+    Temporary::create(directory(path)).map(drop).map_err(fail)
 }
 
 /// Writes `bytes` to `path`, atomically.
@@ -132,6 +140,14 @@ pub fn stale_temporaries(dir: &Path) -> Vec<PathBuf> {
         .collect();
     stale.sort();
     stale
+}
+
+/// The directory that holds `path` (`.` for a bare file name).
+fn directory(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
 }
 
 fn same_file_name(a: &Path, b: &Path) -> bool {

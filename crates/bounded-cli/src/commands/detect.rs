@@ -195,7 +195,7 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
             bail!("{}: output directory does not exist", parent.display());
         }
         refuse_replacing_input(&args.inputs[0], output)?;
-        writable(parent)?;
+        bounded_geom::atomic::probe(output)?;
         return Ok((vec![output.clone()], false));
     }
     if output.exists() && !output.is_dir() {
@@ -269,9 +269,5 @@ fn same_file(a: &Path, b: &Path) -> bool {
 
 /// Fails now, before any work, when no file can be created in `directory`.
 fn writable(directory: &Path) -> Result<()> {
-    tempfile::Builder::new()
-        .prefix(".bounded-probe")
-        .tempfile_in(directory)
-        .map(drop)
-        .with_context(|| format!("cannot write to {}", directory.display()))
+    Ok(bounded_geom::atomic::probe(&directory.join("probe"))?)
 }

@@ -7,8 +7,7 @@ use anyhow::{Context, Result, bail};
 use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
-use bounded_nn::{ModelFile, Schedule, Widths, fit_stages};
-use std::path::Path;
+use bounded_nn::{Schedule, Widths, fit_stages};
 use std::time::Instant;
 
 /// The feature groups selected on the command line.

@@ -3,6 +3,7 @@
 use super::layout::*;
 use super::read::*;
 use super::write::*;
+use crate::DataError;
 use crate::records::BLOCK;
 use crate::table::{Column, Endian, PointTable, PositionType, Property, ScalarType};
 use bounded_geom::PointCloud;
