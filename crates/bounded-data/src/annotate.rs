@@ -302,7 +302,8 @@ fn class_coloured(r: &Column, g: &Column, b: &Column) -> bool {
 }
 
 /// Adds the results to `properties` as `options` say for `format`: an input property of a
-/// name they take is kept as `input_<name>`, or dropped where the options replace it.
+/// name they take (under any flavour) is kept as `input_<name>`, or dropped where the
+/// options replace it.
 fn add_annotation<'a>(
     properties: &mut Vec<Cow<'a, Property>>,
     format: Format,
@@ -371,7 +372,13 @@ fn add_annotation<'a>(
         added.push(Property::new(name, c));
     }
     for new in &added {
-        if let Some(at) = find(properties, &new.name) {
+        // CloudCompare shows `scalar_class` as `class`: an input `class` beside it is kept
+        // aside under either flavour's names.
+        let alias = (NAMES.iter())
+            .find_map(|row| row.iter().position(|n| *n == new.name))
+            .map(|j| NAMES.map(|row| row[j]));
+        let taken = |name: &str| name == new.name || alias.is_some_and(|a| a.contains(&name));
+        if let Some(at) = properties.iter().position(|p| taken(&p.name)) {
             let input = &properties[at];
             let kept = Property::new(format!("input_{}", input.name), input.values.clone());
             properties[at] = Cow::Owned(kept);

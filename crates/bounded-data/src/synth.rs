@@ -508,6 +508,32 @@ mod tests {
         assert!(a.iter().zip(&c).all(|(x, y)| x.1 != y.1));
     }
 
+    #[test]
+    fn freeform_sets_are_deterministic_and_extend_without_changing() {
+        let a = generate(&small(SetKind::Freeform, 5, 4)).unwrap();
+        assert_eq!(a, generate(&small(SetKind::Freeform, 5, 4)).unwrap());
+        // Generated one by one (no thread pool) and as a longer set: the same clouds.
+        let longer = generate(&small(SetKind::Freeform, 5, 5)).unwrap();
+        assert_eq!(&longer[..4], &a[..]);
+        for (i, cloud) in a.iter().enumerate() {
+            assert_eq!(
+                &generate_one(&small(SetKind::Freeform, 5, 4), i).unwrap(),
+                cloud
+            );
+            assert!(
+                cloud.0.starts_with(&format!("freeform_{i:06}_")),
+                "{}",
+                cloud.0
+            );
+        }
+        let other = generate(&small(SetKind::Freeform, 6, 4)).unwrap();
+        assert!(a.iter().zip(&other).all(|(x, y)| x.1 != y.1));
+        // The label rule is checked with the rest of the configuration.
+        let mut bad = small(SetKind::Freeform, 5, 1);
+        bad.label_rule.band = -1.0;
+        assert!(matches!(generate(&bad), Err(DataError::Generator { .. })));
+    }
+
     /// Every shape kind in both sampling modes (seed: the kind's index), from `template`.
     fn every_shape(template: ShapeSpec) -> impl Iterator<Item = ShapeSpec> {
         ShapeKind::ALL

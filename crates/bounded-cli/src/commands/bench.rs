@@ -173,8 +173,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         load_eval(&pcednet.join("default"), "default", &full)?,
         load_eval(&pcednet.join("abc"), "abc", &full)?,
         load_eval(&pcednet.join("abc_noise_0.04"), "abc_noise_0.04", &full)?,
-        generated_eval("boundary", &SetConfig::new(SetKind::Boundary, BOUNDARY_EVAL.0, BOUNDARY_EVAL.1), &full)?,
-        generated_eval("freeform", &SetConfig::new(SetKind::Freeform, FREEFORM_EVAL.0, FREEFORM_EVAL.1), &full)?,
+        generated_eval(
+            "boundary",
+            &SetConfig::new(SetKind::Boundary, BOUNDARY_EVAL.0, BOUNDARY_EVAL.1),
+            &full,
+        )?,
+        generated_eval(
+            "freeform",
+            &SetConfig::new(SetKind::Freeform, FREEFORM_EVAL.0, FREEFORM_EVAL.1),
+            &full,
+        )?,
     ];
 
     // 1-2: main tables with peers, and our CA.

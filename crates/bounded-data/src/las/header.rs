@@ -105,7 +105,8 @@ fn now_days() -> u64 {
 fn year_and_day(mut days: u64) -> (u16, u16) {
     let mut year: u16 = 1970;
     loop {
-        let leap = year % 4 == 0 && (year % 100 != 0 || year % 400 == 0);
+        let leap =
+            year.is_multiple_of(4) && (!year.is_multiple_of(100) || year.is_multiple_of(400));
         let length = if leap { 366 } else { 365 };
         if days < length || year == u16::MAX {
             return (year, days as u16 + 1);

@@ -27,7 +27,7 @@ pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     path: &Path,
     max_block: usize,
 ) -> Result<PointTable, DataError> {
-    let raw = check_evlr_lengths(&mut input, path)?;
+    let raw = check_declared_sizes(&mut input, path)?;
     // LAS 1.4: the 64-bit count, also where the legacy one differs (see the module docs).
     let zero_legacy = raw.large_file.is_some_and(|l| {
         l.number_of_point_records != 0
@@ -100,10 +100,11 @@ impl<R: Seek> Seek for LegacyCount<R> {
     }
 }
 
-/// Checks that every extended VLR fits in the file, then rewinds `input` and returns the raw
+/// Checks that every extended VLR fits in the file and that the point count times the record
+/// length is a file size at all, then rewinds `input` and returns the raw
 /// header: the las crate allocates an EVLR's stated length (up to 2^64 bytes) before reading
 /// it, so a corrupt length must fail here, not exhaust memory (found by fuzzing).
-fn check_evlr_lengths(
+fn check_declared_sizes(
     mut input: impl Read + Seek,
     path: &Path,
 ) -> Result<las::raw::Header, DataError> {
@@ -140,6 +141,23 @@ fn check_evlr_lengths(
                     )
                 })?;
         }
+    }
+    // The las crate computes where the points end without overflow checks.
+    let count = raw
+        .large_file
+        .map_or(0, |l| l.number_of_point_records)
+        .max(u64::from(raw.number_of_point_records));
+    let points_end = count
+        .checked_mul(u64::from(raw.point_data_record_length))
+        .and_then(|b| b.checked_add(u64::from(raw.offset_to_point_data)));
+    if points_end.is_none() {
+        return Err(DataError::malformed(
+            path,
+            format!(
+                "LAS: {count} points of {} bytes each are more than any file holds",
+                raw.point_data_record_length
+            ),
+        ));
     }
     input.rewind().map_err(io)?;
     Ok(raw)

@@ -687,8 +687,11 @@ fn las_with_records(vlrs: Vec<las::Vlr>, evlrs: Vec<las::Vlr>, extra: &[u8]) -> 
     writer.into_inner().unwrap().into_inner()
 }
 
-/// The VLRs (header and data, as in the file) by user ID and record ID, then the EVLRs.
-fn raw_records(bytes: &[u8]) -> (Vec<(String, u16, Vec<u8>)>, Vec<(String, u16, Vec<u8>)>) {
+/// A VLR or EVLR: user ID, record ID, header and data as in the file.
+type RawRecord = (String, u16, Vec<u8>);
+
+/// The VLRs by user ID and record ID, then the EVLRs.
+fn raw_records(bytes: &[u8]) -> (Vec<RawRecord>, Vec<RawRecord>) {
     let u16_at = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
     let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
     let u64_at = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());

@@ -162,7 +162,10 @@ impl Plan {
         match self {
             Plan::Random(_) => RANDOM_SPACING * per_point,
             Plan::BlueNoise { fill, .. } => BLUE_SPACING * fill.1.sqrt() * per_point,
-            Plan::Scan(l) => l.step.min(l.row),
+            // A row's step is `step (1 + g t)`, t uniform in -1..1 across the rows, and its
+            // points are as many as 1 / (1 + g t): half of them lie in rows whose step is
+            // below step sqrt(1 - g^2).
+            Plan::Scan(l) => (l.step * (1.0 - l.gradient * l.gradient).sqrt()).min(l.row),
         }
     }
 
@@ -305,5 +308,51 @@ pub(crate) fn punch_holes(
         points.retain(|_| k.next().unwrap_or(true));
         let mut k = keep.iter().copied();
         uvs.retain(|_| k.next().unwrap_or(true));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::perturb::median_spacing;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn each_sampling_reaches_its_count_and_its_expected_spacing() {
+        // A bare plane: points are their parameters, and the spacing the features are
+        // drawn in (Plan::spacing) is what the sampling gives.
+        let base = Base::HeightField {
+            size: [1.0, 0.8],
+            terms: Vec::new(),
+        };
+        let relief = Relief::new(base, Vec::new(), 0.01);
+        for sampling in [
+            FreeformSampling::Random,
+            FreeformSampling::BlueNoise,
+            FreeformSampling::Scan,
+        ] {
+            for seed in 0..3 {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                let plan = Plan::random(sampling, &relief.base, 4000, &mut rng);
+                let expect = plan.spacing(relief.base.area(), 4000);
+                let (points, uvs) = sample(&relief, &plan, 4000, &mut rng);
+                assert_eq!(points.len(), uvs.len());
+                for (p, uv) in points.iter().zip(&uvs) {
+                    assert_eq!(*p, [uv[0], uv[1], 0.0]);
+                    assert!((0.0..=1.0).contains(&uv[0]) && (0.0..=0.8).contains(&uv[1]));
+                }
+                let n = points.len();
+                if sampling == FreeformSampling::Random {
+                    assert_eq!(n, 4000);
+                }
+                assert!(n > 3400 && n < 4600, "{sampling:?} {seed}: {n}");
+                let measured = median_spacing(&points, expect);
+                assert!(
+                    (measured / expect - 1.0).abs() < 0.1,
+                    "{sampling:?} {seed}: {measured} vs {expect}"
+                );
+            }
+        }
     }
 }
