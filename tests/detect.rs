@@ -326,3 +326,62 @@ fn a_failed_output_names_those_written_before_it() {
         "{err}"
     );
 }
+
+#[test]
+fn annotation_flags_choose_names_class_field_and_colours() {
+    let labelled = box_cloud(3000, 7);
+    let n = labelled.cloud.len();
+    let mut table = PointTable::new(labelled.cloud.clone());
+    // A ground classification, which `auto` must not replace.
+    table.set_property(Property::new("classification", Column::U8(vec![2; n])));
+    let dir = tempfile::tempdir().unwrap();
+    let (las, ply) = (dir.path().join("in.las"), dir.path().join("in.ply"));
+    format::write(&las, &table).unwrap();
+    format::write(&ply, &table).unwrap();
+    let run = |input: &std::path::Path, output: &str, flags: &[&str]| {
+        let output = dir.path().join(output);
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"detect", &input, &"-o", &output];
+        args.extend(flags.iter().map(|f| f as &dyn AsRef<std::ffi::OsStr>));
+        let run = bounded_paths(&args);
+        assert!(run.status.success(), "{flags:?}: {}", stderr(&run));
+        format::read(&output).unwrap()
+    };
+    let value = |t: &PointTable, name: &str| {
+        let c = t.property(name).unwrap_or_else(|| panic!("no {name}"));
+        (0..t.len()).map(|i| c.get_f64(i)).collect::<Vec<_>>()
+    };
+    // auto: the ground classes stay, the class goes to an extra field.
+    let auto = run(&las, "auto.las", &[]);
+    assert_eq!(value(&auto, "classification"), vec![2.0; n]);
+    let class = value(&auto, "class");
+    // classification with codes: the class codes replace them, the input's are kept aside.
+    let coded = run(&las, "coded.las", &["--class-to", "classification:3,9,12"]);
+    assert_eq!(value(&coded, "input_classification"), vec![2.0; n]);
+    let codes = value(&coded, "classification");
+    for (c, code) in class.iter().zip(&codes) {
+        assert_eq!(*code, [3.0, 9.0, 12.0][*c as usize]);
+    }
+    // Plain names and added class colours in PLY.
+    let plain = run(
+        &ply,
+        "plain.ply",
+        &["--flavour", "plain", "--colours", "add"],
+    );
+    assert_eq!(value(&plain, "class"), class);
+    assert!(plain.property("scalar_class").is_none());
+    assert!(plain.property("class_red").is_some() && plain.property("red").is_none());
+    let bad = bounded_paths(&[
+        &"detect",
+        &ply,
+        &"-o",
+        &dir.path().join("x.ply"),
+        &"--colours",
+        &"all",
+    ]);
+    assert!(!bad.status.success());
+    assert!(
+        stderr(&bad).contains("expected keep, replace or add"),
+        "{}",
+        stderr(&bad)
+    );
+}

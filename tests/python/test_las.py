@@ -48,6 +48,13 @@ def survey(path, compressed=False):
     return laspy.read(str(path))
 
 
+def payload(vlr):
+    """A VLR's data as in the file: laspy parses known records (the WKT CRS) into objects."""
+    if hasattr(vlr, "record_data_bytes"):
+        return bytes(vlr.record_data_bytes())
+    return bytes(vlr.record_data)
+
+
 def records(vlrs):
     return {(v.user_id, v.record_id): v for v in vlrs}
 
@@ -66,7 +73,7 @@ def test_records_crs_and_fields_survive(tmp_path, ext):
     assert after.header.global_encoding.wkt
     vlrs, old = records(after.header.vlrs), records(before.header.vlrs)
     for key in [("LASF_Projection", 2112), ("MyCompany", 42)]:
-        assert vlrs[key].record_data == old[key].record_data, key
+        assert payload(vlrs[key]) == payload(old[key]), key
     assert after.header.parse_crs() is not None
     assert [bytes(e.record_data) for e in after.evlrs] == [b"evlr payload" * 10]
     # The ground and building classes and the scan colours stay; the class is an extra dim.

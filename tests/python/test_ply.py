@@ -12,7 +12,9 @@ import pymeshlab
 
 from conftest import box_points, detect
 
-SIZED = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "float64"}
+# The sized names (int16 goes out as int32), and `double`: meshio's binary reader has neither
+# `float64` nor any 16-bit signed type.
+SIZED = {"int8", "uint8", "uint16", "int32", "uint32", "float32", "double"}
 
 
 def las_input(path):

@@ -1,5 +1,6 @@
 //! Command-line arguments.
 
+use bounded_data::annotate::{ClassTarget, Colours, Flavour};
 use bounded_data::synth::NoiseDirection;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::num::NonZeroUsize;
@@ -109,6 +110,20 @@ pub struct DetectArgs {
     /// at that input; the outputs written before it stay.
     #[arg(long)]
     pub separate: bool,
+    /// Where LAS/LAZ outputs put the class: `auto` (the Classification field, codes 1 / 64 /
+    /// 65, unless the input's holds classes such as ground: then an extra field `class`),
+    /// `classification[:NON_EDGE,SHARP,BOUNDARY]` (the input's classes kept as
+    /// `input_classification`) or `extra`.
+    #[arg(long, default_value = "auto")]
+    pub class_to: ClassTarget,
+    /// Class colours: `keep` (the input's colours stay; class colours where it has none),
+    /// `replace`, or `add` (as class_red, class_green, class_blue).
+    #[arg(long, default_value = "keep")]
+    pub colours: Colours,
+    /// Names in PLY and text outputs: `cloudcompare` (scalar_class, scalar_p_*: loaded as
+    /// scalar fields), `plain` (class, p_*) or `meshlab` (plain, and p_sharp as quality).
+    #[arg(long, default_value = "cloudcompare")]
+    pub flavour: Flavour,
 }
 
 /// Arguments of `train`.

@@ -123,6 +123,70 @@ pub enum Flavour {
     MeshLab,
 }
 
+impl std::str::FromStr for ClassTarget {
+    type Err = String;
+
+    /// `auto`, `extra`, `classification` (the default codes) or
+    /// `classification:NON_EDGE,SHARP,BOUNDARY` (three codes 0-255), as the CLI spells them.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.split_once(':') {
+            None if s == "auto" => Ok(ClassTarget::Auto),
+            None if s == "extra" => Ok(ClassTarget::Extra),
+            None if s == "classification" => Ok(ClassTarget::Classification(ClassCodes::default())),
+            Some(("classification", codes)) => {
+                let codes: Vec<u8> = (codes.split(','))
+                    .map(|c| c.trim().parse::<u8>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| {
+                        format!("{codes:?}: expected three codes 0-255, such as 1,64,65")
+                    })?;
+                match codes[..] {
+                    [non_edge, sharp, boundary] => Ok(ClassTarget::Classification(ClassCodes {
+                        non_edge,
+                        sharp,
+                        boundary,
+                    })),
+                    _ => Err(format!(
+                        "{} codes given, three needed (non-edge, sharp, boundary)",
+                        codes.len()
+                    )),
+                }
+            }
+            _ => Err(format!(
+                "{s:?}: expected auto, extra, classification or classification:NON_EDGE,SHARP,BOUNDARY"
+            )),
+        }
+    }
+}
+
+impl std::str::FromStr for Colours {
+    type Err = String;
+
+    /// `keep`, `replace` or `add`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "keep" => Ok(Colours::KeepInput),
+            "replace" => Ok(Colours::Replace),
+            "add" => Ok(Colours::Add),
+            _ => Err(format!("{s:?}: expected keep, replace or add")),
+        }
+    }
+}
+
+impl std::str::FromStr for Flavour {
+    type Err = String;
+
+    /// `cloudcompare`, `plain` or `meshlab`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "cloudcompare" => Ok(Flavour::CloudCompare),
+            "plain" => Ok(Flavour::Plain),
+            "meshlab" => Ok(Flavour::MeshLab),
+            _ => Err(format!("{s:?}: expected cloudcompare, plain or meshlab")),
+        }
+    }
+}
+
 /// The class and probability names of each flavour: plain, then CloudCompare's.
 const NAMES: [[&str; 4]; 2] = [
     ["class", "p_nonedge", "p_sharp", "p_boundary"],
@@ -561,6 +625,41 @@ mod tests {
         let extra = annotate(&unclassified, "las", &with(ClassTarget::Extra));
         assert_eq!(values(&extra, "classification"), [1.0, 0.0, 1.0]);
         assert_eq!(values(&extra, "class"), [1.0, 0.0, 2.0]);
+    }
+
+    #[test]
+    fn options_parse_from_their_command_line_names() {
+        let codes = |non_edge, sharp, boundary| ClassCodes {
+            non_edge,
+            sharp,
+            boundary,
+        };
+        assert_eq!("auto".parse(), Ok(ClassTarget::Auto));
+        assert_eq!("extra".parse(), Ok(ClassTarget::Extra));
+        assert_eq!(
+            "classification".parse(),
+            Ok(ClassTarget::Classification(codes(1, 64, 65)))
+        );
+        assert_eq!(
+            "classification:0, 6,255".parse(),
+            Ok(ClassTarget::Classification(codes(0, 6, 255)))
+        );
+        for bad in [
+            "classification:1,2",
+            "classification:1,2,256",
+            "class",
+            "auto:1",
+        ] {
+            assert!(bad.parse::<ClassTarget>().is_err(), "{bad}");
+        }
+        assert_eq!("keep".parse(), Ok(Colours::KeepInput));
+        assert_eq!("replace".parse(), Ok(Colours::Replace));
+        assert_eq!("add".parse(), Ok(Colours::Add));
+        assert!("Keep".parse::<Colours>().is_err());
+        assert_eq!("cloudcompare".parse(), Ok(Flavour::CloudCompare));
+        assert_eq!("plain".parse(), Ok(Flavour::Plain));
+        assert_eq!("meshlab".parse(), Ok(Flavour::MeshLab));
+        assert!("open3d".parse::<Flavour>().unwrap_err().contains("meshlab"));
     }
 
     #[test]

@@ -8,7 +8,10 @@
 //!
 //! Writing uses the sized type names (`uint8`, `uint16`, `float32`, ...) of the PLY
 //! specification, which CloudCompare, MeshLab, Open3D, meshio and plyfile all read (Open3D
-//! skips and meshio refuses the classic `ushort` and `short`).
+//! skips and meshio refuses the classic `ushort` and `short`), except `double` for 64-bit
+//! floats: meshio's binary reader has no `float64`. It reads no 16-bit signed type under
+//! either name either, so `int16` columns (the scan angle of LAS 1.4 clouds) are written as
+//! `int32`, which holds their values: they read back as 32-bit.
 
 use crate::DataError;
 use crate::error::quoted;
@@ -82,8 +85,7 @@ fn scalar_type(name: &str) -> Option<ScalarType> {
     })
 }
 
-/// The sized type name, which every reader takes: Open3D and meshio skip or refuse the
-/// classic `ushort` and `short`.
+/// The type name that every reader takes (see the module documentation).
 fn type_name(ty: ScalarType) -> &'static str {
     match ty {
         ScalarType::I8 => "int8",
@@ -93,7 +95,7 @@ fn type_name(ty: ScalarType) -> &'static str {
         ScalarType::I32 => "int32",
         ScalarType::U32 => "uint32",
         ScalarType::F32 => "float32",
-        ScalarType::F64 => "float64",
+        ScalarType::F64 => "double",
     }
 }
 
@@ -382,8 +384,26 @@ pub fn write_to(
     path: &Path,
 ) -> Result<(), DataError> {
     view.check(path)?;
+    // meshio's binary reader has no 16-bit signed type: such columns go out as int32, which
+    // holds every value.
+    let widened: Vec<Property> = (view.properties.iter())
+        .filter_map(|p| match &p.values {
+            Column::I16(v) => Some(Property::new(
+                p.name.clone(),
+                Column::I32(v.iter().map(|&x| i32::from(x)).collect()),
+            )),
+            _ => None,
+        })
+        .collect();
+    let mut wide = widened.iter();
+    let mut view = view.clone();
+    for p in &mut view.properties {
+        if matches!(p.values, Column::I16(_)) {
+            *p = wide.next().expect("one widened column per int16 column");
+        }
+    }
     let mut out = std::io::BufWriter::with_capacity(1 << 20, out);
-    write_body(&mut out, view, encoding).map_err(|e| DataError::io(path, e))?;
+    write_body(&mut out, &view, encoding).map_err(|e| DataError::io(path, e))?;
     out.flush().map_err(|e| DataError::io(path, e))
 }
 
@@ -452,6 +472,18 @@ mod tests {
     }
 
     #[test]
+    fn int16_columns_are_written_as_int32_with_their_values() {
+        let mut t = sample();
+        t.set_property(Property::new("angle", Column::I16(vec![-32768, 5, 32767])));
+        for encoding in [Encoding::Ascii, Encoding::BinaryBigEndian] {
+            let back = round_trip(&t, encoding);
+            let angle = back.property("angle").unwrap();
+            assert_eq!(*angle, Column::I32(vec![-32768, 5, 32767]), "{encoding:?}");
+            assert_eq!(back.property("intensity"), t.property("intensity"));
+        }
+    }
+
+    #[test]
     fn headers_use_the_sized_type_names() {
         let mut bytes = Vec::new();
         let t = sample();
@@ -470,7 +502,7 @@ mod tests {
         assert_eq!(
             types,
             [
-                "float32", "float32", "float32", "uint16", "int8", "float64", "float32"
+                "float32", "float32", "float32", "uint16", "int8", "double", "float32"
             ]
         );
     }

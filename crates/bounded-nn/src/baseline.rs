@@ -7,6 +7,7 @@ use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 
 use crate::fit::{FeatureSet, columns};
+use crate::report::{FeaturedCloud, MethodResults};
 use crate::{BinaryConfusion, NnError};
 
 /// A fitted CA classifier (sharp edge or not).
@@ -68,6 +69,19 @@ impl CaBaseline {
     /// The sharp-edge counts of [`predict`](Self::predict) on `set` against its labels.
     pub fn confusion(&self, set: &FeatureSet) -> Result<BinaryConfusion, NnError> {
         BinaryConfusion::from_labels(&set.labels, &self.predict(set), Class::Sharp as u8)
+    }
+
+    /// The results on `clouds` (their features computed with the fit's configuration), as
+    /// the method `name` with sharp edges positive.
+    pub fn results(&self, name: &str, clouds: &[FeaturedCloud]) -> Result<MethodResults, NnError> {
+        let models = (clouds.iter())
+            .map(|c| Ok((c.name.clone(), self.confusion(&c.features)?)))
+            .collect::<Result<_, NnError>>()?;
+        Ok(MethodResults {
+            name: name.to_string(),
+            positive: Class::Sharp.name().to_string(),
+            models,
+        })
     }
 
     /// The surface variation of a row at the chosen scale (0 for a zero covariance).
@@ -135,6 +149,19 @@ mod tests {
         let mut wrong = train;
         wrong.labels[3] = 1;
         assert_eq!(ca.confusion(&wrong).unwrap().fn_, 1);
+        let cloud = FeaturedCloud {
+            name: "six".into(),
+            cloud: bounded_geom::PointCloud::from_f64(&[[0.0; 3]; 6]).unwrap(),
+            labels: vec![Class::NonEdge; 6],
+            features: wrong,
+        };
+        let method = ca.results("CA", &[cloud]).unwrap();
+        assert_eq!(
+            (method.name.as_str(), method.positive.as_str()),
+            ("CA", "sharp")
+        );
+        assert_eq!(method.models[0].0, "six");
+        assert_eq!(method.models[0].1.fn_, 1);
     }
 
     #[test]

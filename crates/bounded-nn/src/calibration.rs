@@ -193,6 +193,24 @@ impl Calibration {
     }
 }
 
+/// Markdown table of the median sharp MCC of each named calibration at every one of
+/// [`SENSITIVITIES`], one row each.
+pub fn sensitivity_table(rows: &[(&str, Calibration)]) -> String {
+    let mut out = String::from("| set |");
+    for s in SENSITIVITIES {
+        let _ = write!(out, " {s} |");
+    }
+    let _ = writeln!(out, "\n|---|{}", "---|".repeat(SENSITIVITIES.len()));
+    for (name, c) in rows {
+        let _ = write!(out, "| {name} |");
+        for mcc in c.median_mcc() {
+            let _ = write!(out, " {mcc:.3} |");
+        }
+        out.push('\n');
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -232,6 +250,40 @@ mod tests {
         assert_eq!((at[1].tp, at[1].fp, at[1].tn, at[1].fn_), (2, 1, 1, 0));
         // 0.9: threshold 0.1: all four.
         assert_eq!((at[2].tp, at[2].fp, at[2].tn, at[2].fn_), (2, 2, 0, 0));
+    }
+
+    #[test]
+    fn sensitivity_table_by_hand() {
+        let perfect = BinaryConfusion {
+            tp: 1,
+            fp: 0,
+            tn: 1,
+            fn_: 0,
+        };
+        let all_sharp = BinaryConfusion {
+            tp: 1,
+            fp: 1,
+            tn: 0,
+            fn_: 0,
+        };
+        // At the lowest sensitivity the cloud is perfect (MCC 1), above it all sharp (0).
+        let mut at = vec![all_sharp; SENSITIVITIES.len()];
+        at[0] = perfect;
+        let c = Calibration {
+            sharp: Reliability::new(2),
+            boundary: Reliability::new(2),
+            sweeps: vec![at],
+        };
+        let table = sensitivity_table(&[("a", c)]);
+        let lines: Vec<&str> = table.lines().collect();
+        assert_eq!(
+            lines[0],
+            "| set | 0.1 | 0.2 | 0.3 | 0.4 | 0.5 | 0.6 | 0.7 | 0.8 | 0.9 |"
+        );
+        assert_eq!(lines[1], format!("|---|{}", "---|".repeat(9)));
+        let zeros = " 0.000 |".repeat(8);
+        assert_eq!(lines[2], format!("| a | 1.000 |{zeros}"));
+        assert_eq!(lines.len(), 3);
     }
 
     #[test]

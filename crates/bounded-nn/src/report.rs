@@ -63,6 +63,16 @@ impl MethodResults {
     }
 }
 
+/// The median scores over `results` with `positive` the positive class; `None` without
+/// results.
+pub fn median_scores(results: &[ModelResult], positive: Class) -> Option<Scores> {
+    let confusions: Vec<_> = results
+        .iter()
+        .map(|r| r.matrix.binary(positive as u8))
+        .collect();
+    Scores::median(&confusions)
+}
+
 /// One published result: a method's confusion on one model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Published<'a> {
@@ -329,6 +339,10 @@ mod tests {
             result("b", [[1, 0, 2], [0, 4, 0], [1, 0, 0]]),
         ];
         assert_eq!(pooled(&results).counts, [[6, 1, 2], [2, 7, 0], [1, 0, 1]]);
+        // Sharp: a has tp 3, fn 2, fp 1 and b tp 4, fn 0, fp 0: recalls 0.6 and 1.
+        let median = median_scores(&results, Class::Sharp).unwrap();
+        assert!((median.recall - 0.8).abs() < 1e-12, "{median:?}");
+        assert_eq!(median_scores(&[], Class::Sharp), None);
         let table = confusion_table(&results);
         let rows: Vec<&str> = table.lines().skip(2).collect();
         assert_eq!(

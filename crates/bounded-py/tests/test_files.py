@@ -126,7 +126,7 @@ def test_unreadable_files_name_the_file(tmp_path):
         ({"short": np.zeros(2, np.uint8)}, ValueError, "property 'short' has 2 values for 3 points"),
         ({"big": np.zeros(3, np.int64)}, TypeError, "field 'big' has dtype int64"),
         ({"rgb": np.zeros((3, 3), np.uint8)}, ValueError, "field 'rgb' must be a 1-D array"),
-        ({"x": np.zeros(3)}, ValueError, "property name 'x' is used twice"),
+        ({"x": np.zeros(3)}, ValueError, "the property name 'x' appears twice"),
         ({"a b": np.zeros(3)}, ValueError, "is empty or has a space or comma"),
     ],
 )

@@ -16,10 +16,10 @@ use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 use bounded_nn::baseline::CaBaseline;
-use bounded_nn::calibration::{Calibration, SENSITIVITIES};
+use bounded_nn::calibration::{Calibration, sensitivity_table};
 use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths, columns};
 use bounded_nn::report::{
-    self, FeaturedCloud, MethodResults, ModelResult, confusion_table, medians_table,
+    self, FeaturedCloud, MethodResults, ModelResult, confusion_table, median_scores, medians_table,
     per_model_table, pooled,
 };
 use bounded_nn::{Classifier, Detector};
@@ -190,7 +190,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     for set in &sets[..2] {
         let ours = score(&ours_scorer, &full, set)?;
         let mut methods = vec![MethodResults::of("BoundED-rs (ours)", &ours, Class::Sharp)];
-        methods.push(ca_results(&ca, set)?);
+        methods.push(ca.results("CA-rs (surface variation, ours)", &set.clouds)?);
         let models: Vec<String> = set.clouds.iter().map(|c| c.name.clone()).collect();
         methods.extend(peer_methods(&peers, set.key, &models));
         let _ = writeln!(
@@ -272,11 +272,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // 5: noise and boundaries.
     let clean = score(&ours_scorer, &full, &sets[1])?;
     let noisy = score(&ours_scorer, &full, &sets[2])?;
-    let mcc = |r: &[ModelResult]| {
-        MethodResults::of("", r, Class::Sharp)
-            .median()
-            .map_or(f64::NAN, |s| s.mcc)
-    };
+    let mcc = |r: &[ModelResult]| median_scores(r, Class::Sharp).map_or(f64::NAN, |s| s.mcc);
     let _ = writeln!(
         report,
         "\n## Noise\n\nMedian MCC (sharp): clean ABC {:.3}, noisy ABC (abc_noise_0.04) {:.3}, \
@@ -298,10 +294,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         config.outlier_fraction = 0.0;
         let config = config.with_noise(Some(&[level]), direction)?;
         let set = generated_eval("noise", &config, &full)?;
-        let (sweep_mcc, sweep_f1) =
-            MethodResults::of("", &score(&ours_scorer, &full, &set)?, Class::Sharp)
-                .median()
-                .map_or((f64::NAN, f64::NAN), |s| (s.mcc, s.f1));
+        let (sweep_mcc, sweep_f1) = median_scores(&score(&ours_scorer, &full, &set)?, Class::Sharp)
+            .map_or((f64::NAN, f64::NAN), |s| (s.mcc, s.f1));
         let _ = writeln!(
             report,
             "| {level} | {} | {sweep_mcc:.3} | {sweep_f1:.3} |",
@@ -367,30 +361,19 @@ fn calibration_section(detector: &Detector, sets: &[EvalSet]) -> Result<String> 
 Validation clouds ({}, training noise): expected \
          calibration error of p_sharp {:.4}, of p_boundary {:.4}; the highest median sharp MCC \
          at sensitivity {} (`--sensitivity`; without it, the most probable class).\n\n\
-         p_sharp reliability on them:\n\n{}\nMedian sharp MCC against `--sensitivity`:\n\n\
-         | set |",
+         p_sharp reliability on them:\n\n{}\nMedian sharp MCC against `--sensitivity`:\n\n",
         VALIDATION_SETS.join(", "),
         on_validation.sharp.expected_calibration_error(),
         on_validation.boundary.expected_calibration_error(),
         on_validation.best_sensitivity(),
         on_validation.sharp.table()
     );
-    for s in SENSITIVITIES {
-        let _ = write!(out, " {s} |");
-    }
-    out.push_str(&format!("\n|---|{}\n", "---|".repeat(SENSITIVITIES.len())));
-    let mut row = |name: &str, c: &Calibration| {
-        let _ = write!(out, "| {name} |");
-        for mcc in c.median_mcc() {
-            let _ = write!(out, " {mcc:.3} |");
-        }
-        out.push('\n');
-    };
-    row("validation", &on_validation);
+    let mut rows = vec![("validation", on_validation)];
     for set in sets {
         let clouds: Vec<_> = set.clouds.iter().map(FeaturedCloud::labelled).collect();
-        row(set.key, &Calibration::measure(detector, &clouds)?);
+        rows.push((set.key, Calibration::measure(detector, &clouds)?));
     }
+    out.push_str(&sensitivity_table(&rows));
     Ok(out)
 }
 
@@ -509,8 +492,8 @@ fn ablation_row(
     // Default and ABC: MCC and F1; noisy ABC: MCC, to show what each ablation does to the
     // noise gap.
     for (k, set) in sets[..3].iter().enumerate() {
-        let m = MethodResults::of("", &score(scorer, full, set)?, Class::Sharp);
-        let s = m.median().context("empty evaluation set")?;
+        let s = median_scores(&score(scorer, full, set)?, Class::Sharp)
+            .context("empty evaluation set")?;
         let _ = write!(row, " {:.3} |", s.mcc);
         if k < 2 {
             let _ = write!(row, " {:.3} |", s.f1);
@@ -566,16 +549,4 @@ fn pr_plot(title: &str, methods: &[MethodResults]) -> Canvas {
         })
         .collect();
     precision_recall(title, &series)
-}
-
-/// The CA baseline's results on `set` (its features computed with the fit's configuration).
-fn ca_results(ca: &CaBaseline, set: &EvalSet) -> Result<MethodResults> {
-    let models = (set.clouds.iter())
-        .map(|c| Ok((c.name.clone(), ca.confusion(&c.features)?)))
-        .collect::<Result<_>>()?;
-    Ok(MethodResults {
-        name: "CA-rs (surface variation, ours)".into(),
-        positive: "sharp".into(),
-        models,
-    })
 }

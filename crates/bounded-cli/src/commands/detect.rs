@@ -7,6 +7,7 @@ use crate::pipeline;
 use crate::progress;
 use anyhow::{Context, Result, bail};
 use bounded_data::DataError;
+use bounded_data::annotate::AnnotateOptions;
 use bounded_data::format::{self, Format};
 use bounded_data::table::PointTable;
 use bounded_geom::{GeomError, PointCloud};
@@ -102,7 +103,12 @@ fn label(
         let range = first..first + table.len();
         let classes = &detection.classes[range.clone()];
         let probabilities = &detection.probabilities[range.clone()];
-        let written = format::write_annotated(output, table, classes, probabilities);
+        let options = AnnotateOptions {
+            class_to: args.class_to,
+            colours: args.colours,
+            flavour: args.flavour,
+        };
+        let written = format::write_annotated_with(output, table, classes, probabilities, &options);
         if let Err(e) = written {
             writing.finish_and_clear();
             let done: Vec<_> = outputs[..k]
