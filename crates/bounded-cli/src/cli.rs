@@ -83,23 +83,8 @@ pub struct DetectArgs {
     /// las or ply) instead of its input's.
     #[arg(long, value_name = "EXT")]
     pub format: Option<String>,
-    /// Model file (default: the embedded model).
-    #[arg(long)]
-    pub model: Option<PathBuf>,
-    /// Neighbourhood sizes, largest first, overriding the model's (same count as the model's).
-    #[arg(long, value_delimiter = ',')]
-    pub scales: Option<Vec<usize>>,
-    /// Run only the first network of a two-stage model (the embedded model has two): about
-    /// twice as fast, with the first network's lower quality on noisy and randomly sampled
-    /// clouds.
-    #[arg(long)]
-    pub fast: bool,
-    /// How readily a point is called a sharp edge, strictly between 0 and 1: sharp where
-    /// p_sharp reaches 1 - SENSITIVITY (and p_boundary does not exceed it). Without it, the
-    /// most probable class. `bounded eval --sensitivity` scores a choice on labelled clouds;
-    /// the bench prints MCC against it for every evaluation set.
-    #[arg(long)]
-    pub sensitivity: Option<f32>,
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Leave out points with a NaN or infinite coordinate (such as the invalid pixels of
     /// organised PCL clouds, or the no-return points of E57 scans) instead of refusing the
     /// file; the output holds the other points.
@@ -187,9 +172,8 @@ pub enum FeatureGroupArg {
 /// Arguments of `eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
-    /// Model file (default: the embedded model).
-    #[arg(long)]
-    pub model: Option<PathBuf>,
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Directory of labelled clouds (PCEDNet colours, Bazazian colours or a `class` property).
     #[arg(long)]
     pub data: PathBuf,
@@ -202,13 +186,26 @@ pub struct EvalArgs {
     /// Positive class of the scores.
     #[arg(long, value_enum, default_value_t = PositiveArg::Sharp)]
     pub positive: PositiveArg,
-    /// Neighbourhood sizes, largest first, overriding the model's (as `detect --scales`).
+}
+
+/// The model options of `detect` and `eval`.
+#[derive(Debug, Default, Args)]
+pub struct ModelArgs {
+    /// Model file (default: the embedded model).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Neighbourhood sizes, largest first, overriding the model's (same count as the model's).
     #[arg(long, value_delimiter = ',')]
     pub scales: Option<Vec<usize>>,
-    /// Score the first network of a two-stage model alone (as `detect --fast`).
+    /// Run only the first network of a two-stage model (the embedded model has two): about
+    /// twice as fast, with the first network's lower quality on noisy and randomly sampled
+    /// clouds.
     #[arg(long)]
     pub fast: bool,
-    /// The decision threshold (as `detect --sensitivity`).
+    /// How readily a point is called a sharp edge, strictly between 0 and 1: sharp where
+    /// p_sharp reaches 1 - SENSITIVITY (and p_boundary does not exceed it). Without it, the
+    /// most probable class. `bounded eval --sensitivity` scores a choice on labelled clouds;
+    /// the bench prints MCC against it for every evaluation set.
     #[arg(long)]
     pub sensitivity: Option<f32>,
 }

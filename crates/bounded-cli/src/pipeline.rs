@@ -1,27 +1,14 @@
 //! The detector of the command line's model options, run with a progress bar.
 
+use crate::cli::ModelArgs;
 use crate::progress;
 use anyhow::{Context, Result};
 use bounded_geom::PointCloud;
 use bounded_nn::{Detection, Detector};
-use std::path::Path;
 
-/// The model options of `detect` and `eval`.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ModelOptions<'a> {
-    /// A model file (default: the embedded model).
-    pub model: Option<&'a Path>,
-    /// Scales replacing the model's.
-    pub scales: Option<&'a [usize]>,
-    /// The first stage alone.
-    pub fast: bool,
-    /// The decision threshold.
-    pub sensitivity: Option<f32>,
-}
-
-/// The detector of `options`.
-pub fn detector(options: ModelOptions<'_>) -> Result<Detector> {
-    let ModelOptions {
+/// The detector of the model options (the default ones: the embedded model as it is).
+pub fn detector(options: &ModelArgs) -> Result<Detector> {
+    let ModelArgs {
         model,
         scales,
         fast,
@@ -36,10 +23,10 @@ pub fn detector(options: ModelOptions<'_>) -> Result<Detector> {
     if let Some(scales) = scales {
         detector = detector.with_scales(scales).context("--scales")?;
     }
-    if fast {
+    if *fast {
         detector = detector.first_stage_only().context("--fast")?;
     }
-    if let Some(s) = sensitivity {
+    if let Some(s) = *sensitivity {
         detector = detector.with_sensitivity(s).context("--sensitivity")?;
     }
     Ok(detector)

@@ -1,20 +1,11 @@
 //! The features of a cloud do not depend on its units or on a far outlier: the cloud stores
 //! its offsets in a frame that keeps them usable (see `bounded_geom::PointCloud`).
 
+mod common;
+
 use bounded_features::{FeatureConfig, FeatureGroups, extract};
 use bounded_geom::PointCloud;
-
-/// SplitMix64 in [0, 1): deterministic test data without a dependency.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) as f64 / 2f64.powi(64)
-    }
-}
+use common::Rng;
 
 /// `n` random points on the surface of the cube `[0, side]^3` moved to `at`: creases,
 /// corners and flat faces.

@@ -3,33 +3,20 @@
 //! Index helpers name the 12 BoundED values of a scale: sigma_u 0..3, sigma_l 3..6,
 //! d_perp 6, d_par 7, s_perp 8, s_par 9, c_perp 10, c_par 11.
 
+mod common;
+
 use bounded_features::{
     CONTEXT_PER_SCALE, FeatureConfig, FeatureError, FeatureGroups, Features, extract,
     extract_chunks, extract_chunks_staged, extract_in_context,
 };
 use bounded_geom::{GeomError, PointCloud};
+use common::Rng;
 
 const D_PERP: usize = 6;
 const S_PERP: usize = 8;
 const S_PAR: usize = 9;
 const C_PERP: usize = 10;
 const C_PAR: usize = 11;
-
-/// SplitMix64 in [0, 1): deterministic test data without a dependency.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) as f64 / 2f64.powi(64)
-    }
-    /// Uniform in [-a, a).
-    fn sym(&mut self, a: f64) -> f64 {
-        a * (2.0 * self.next() - 1.0)
-    }
-}
 
 fn config(scales: &[usize]) -> FeatureConfig {
     FeatureConfig {

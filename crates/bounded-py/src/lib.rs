@@ -100,14 +100,7 @@ fn feature_groups(groups: Option<Vec<String>>) -> PyResult<FeatureGroups> {
     let Some(names) = groups else {
         return Ok(FeatureGroups::BOUNDED);
     };
-    let mut selected = FeatureGroups {
-        sigma: false,
-        sigma_u: false,
-        sigma_l: false,
-        d: false,
-        s: false,
-        c: false,
-    };
+    let mut selected = FeatureGroups::NONE;
     for name in &names {
         let flag = match name.as_str() {
             "sigma" => &mut selected.sigma,

@@ -14,7 +14,11 @@ use bounded_nn::ConfusionMatrix;
 
 pub fn run(args: &DemoArgs) -> Result<()> {
     let scene = demo_scene(args.seed)?;
-    let detection = pipeline::detect(&pipeline::detector(Default::default())?, &scene.cloud, true)?;
+    let detection = pipeline::detect(
+        &pipeline::detector(&Default::default())?,
+        &scene.cloud,
+        true,
+    )?;
 
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;

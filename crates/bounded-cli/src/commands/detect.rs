@@ -19,12 +19,7 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on unknown formats and unusable outputs before any work is done.
     let (outputs, into_directory) = output_paths(args)?;
-    let detector = pipeline::detector(pipeline::ModelOptions {
-        model: args.model.as_deref(),
-        scales: args.scales.as_deref(),
-        fast: args.fast,
-        sensitivity: args.sensitivity,
-    })?;
+    let detector = pipeline::detector(&args.model)?;
 
     // The inputs labelled together: all of them (tiles of one cloud), or each on its own.
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();

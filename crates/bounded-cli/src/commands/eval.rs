@@ -12,12 +12,7 @@ use std::time::Instant;
 
 pub fn run(args: &EvalArgs) -> Result<()> {
     let start = Instant::now();
-    let detector = pipeline::detector(pipeline::ModelOptions {
-        model: args.model.as_deref(),
-        scales: args.scales.as_deref(),
-        fast: args.fast,
-        sensitivity: args.sensitivity,
-    })?;
+    let detector = pipeline::detector(&args.model)?;
     let smooth = if args.smooth_as_sharp {
         Class::Sharp
     } else {

@@ -33,7 +33,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         ColourBy::Truth => dataset::read_labelled(&args.input, Class::NonEdge)?.labels,
         ColourBy::Detect => {
-            let detector = pipeline::detector(Default::default())?;
+            let detector = pipeline::detector(&Default::default())?;
             pipeline::detect(&detector, &table.cloud, true)
                 .with_context(|| args.input.display().to_string())?
                 .classes

@@ -675,20 +675,9 @@ impl<'a> Placer<'a> {
                 vec![(profile, plane(points, false, rng))]
             }
             6..=7 => {
-                let (origin, e1, e2) = self.frame(false, rng);
-                word(r, u, rng)
-                    .into_iter()
-                    .map(|points| {
-                        let design = Design::Plane {
-                            origin,
-                            e1,
-                            e2,
-                            points,
-                            closed: false,
-                        };
-                        (profile, design)
-                    })
-                    .collect()
+                let frame = self.frame(false, rng);
+                let curves = word(r, u, rng).into_iter().map(|points| (points, false));
+                planes(profile, frame, curves)
             }
             8..=10 => {
                 let points = self.closed_curve(r, rng);
@@ -716,39 +705,23 @@ impl<'a> Placer<'a> {
                     .map(|i| turtle(&moves, i as f64 * pitch - half, step))
                     .collect();
                 centred(&mut paths);
-                let (origin, e1, e2) = self.frame(false, rng);
-                paths
-                    .into_iter()
-                    .map(|points| {
-                        let design = Design::Plane {
-                            origin,
-                            e1,
-                            e2,
-                            points,
-                            closed: false,
-                        };
-                        (profile, design)
-                    })
-                    .collect()
+                let frame = self.frame(false, rng);
+                planes(
+                    profile,
+                    frame,
+                    paths.into_iter().map(|points| (points, false)),
+                )
             }
             _ => {
                 let count = rng.random_range(2..=6);
                 let pitch = 2.0 * r + (GAP + 1.0) * u + detail(rng, 0.5 * u, 6.0 * u);
                 let inner = arc_min + detail(rng, 0.5 * u, 10.0 * u);
-                let (origin, e1, e2) = self.frame(false, rng);
-                (0..count)
-                    .map(|i| {
-                        let rho = inner + i as f64 * pitch;
-                        let design = Design::Plane {
-                            origin,
-                            e1,
-                            e2,
-                            points: ellipse(rho, rho, step),
-                            closed: true,
-                        };
-                        (profile, design)
-                    })
-                    .collect()
+                let frame = self.frame(false, rng);
+                let rings = (0..count).map(|i| {
+                    let rho = inner + i as f64 * pitch;
+                    (ellipse(rho, rho, step), true)
+                });
+                planes(profile, frame, rings)
             }
         }
     }
@@ -1136,6 +1109,27 @@ pub fn generate_freeform(spec: &FreeformSpec) -> Result<LabelledCloud, DataError
         source,
     })?;
     Ok(LabelledCloud { cloud, labels })
+}
+
+/// Features of one `profile` along `curves` (points, closed) drawn in one plane `frame`
+/// (origin, e1, e2).
+fn planes(
+    profile: Profile,
+    (origin, e1, e2): (V3, V3, V3),
+    curves: impl Iterator<Item = (Vec<P2>, bool)>,
+) -> Vec<(Profile, Design)> {
+    curves
+        .map(|(points, closed)| {
+            let design = Design::Plane {
+                origin,
+                e1,
+                e2,
+                points,
+                closed,
+            };
+            (profile, design)
+        })
+        .collect()
 }
 
 #[cfg(test)]

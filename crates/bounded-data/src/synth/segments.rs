@@ -3,7 +3,7 @@
 
 use super::grid::{Grid, bounds};
 use super::mesh::Polyline;
-use super::vec3::{V3, add, dot, lerp, norm, scale, segment_distance, sub};
+use super::vec3::{V3, lerp, norm, segment_distance, segment_parameter, sub};
 
 /// Polylines cut into pieces no longer than the query radius, bucketed by their midpoints.
 pub(crate) struct SegmentIndex {
@@ -150,17 +150,10 @@ impl CurveTree {
         }
         best.map(|(distance, i)| {
             let (a, b) = self.segment(i);
-            let ab = sub(b, a);
-            let len2 = dot(ab, ab);
-            let t = if len2 > 0.0 {
-                (dot(sub(p, a), ab) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
             Nearest {
                 distance,
-                point: add(a, scale(ab, t)),
-                direction: ab,
+                point: lerp(a, b, segment_parameter(p, a, b)),
+                direction: sub(b, a),
             }
         })
     }

@@ -42,16 +42,20 @@ pub(crate) fn lerp(a: V3, b: V3, t: f64) -> V3 {
     add(a, scale(sub(b, a), t))
 }
 
-/// Distance from `p` to the segment `a`-`b`.
-pub(crate) fn segment_distance(p: V3, a: V3, b: V3) -> f64 {
+/// Where on the segment `a`-`b` (0 at `a`, 1 at `b`) the point nearest `p` lies.
+pub(crate) fn segment_parameter(p: V3, a: V3, b: V3) -> f64 {
     let ab = sub(b, a);
     let len2 = dot(ab, ab);
-    let t = if len2 > 0.0 {
+    if len2 > 0.0 {
         (dot(sub(p, a), ab) / len2).clamp(0.0, 1.0)
     } else {
         0.0
-    };
-    norm(sub(p, lerp(a, b, t)))
+    }
+}
+
+/// Distance from `p` to the segment `a`-`b`.
+pub(crate) fn segment_distance(p: V3, a: V3, b: V3) -> f64 {
+    norm(sub(p, lerp(a, b, segment_parameter(p, a, b))))
 }
 
 /// Two unit vectors completing the unit vector `n` to a right-handed orthonormal frame
