@@ -16,11 +16,10 @@ use bounded_data::dataset::cloud_files;
 use bounded_data::labels::{Convention, from_table, load};
 use bounded_data::table::PointTable;
 use bounded_data::{LabelledCloud, format};
-use bounded_geom::{Class, KnnIndex, cross, dot};
+use bounded_geom::vec3::{V3, cross, dot, norm, normalize, scale, sub};
+use bounded_geom::{Class, KnnIndex};
 use bounded_nn::{BinaryConfusion, median};
 use std::path::{Path, PathBuf};
-
-type V3 = [f64; 3];
 
 /// Neighbours searched for the clean sharp points nearest to a noisy point.
 const K: usize = 32;
@@ -211,7 +210,7 @@ fn unit_normals(table: &PointTable, path: &Path) -> Result<Vec<V3>, String> {
     };
     let (nx, ny, nz) = (column("nx")?, column("ny")?, column("nz")?);
     Ok((0..table.len())
-        .map(|i| unit([nx.get_f64(i), ny.get_f64(i), nz.get_f64(i)]))
+        .map(|i| normalize([nx.get_f64(i), ny.get_f64(i), nz.get_f64(i)]))
         .collect())
 }
 
@@ -234,20 +233,6 @@ fn positions(labelled: &LabelledCloud) -> Vec<V3> {
         .collect()
 }
 
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn scale(v: V3, s: f64) -> V3 {
-    [v[0] * s, v[1] * s, v[2] * s]
-}
-
 fn dist(a: V3, b: V3) -> f64 {
-    let d = sub(a, b);
-    dot(d, d).sqrt()
-}
-
-fn unit(v: V3) -> V3 {
-    let l = dot(v, v).sqrt();
-    [v[0] / l, v[1] / l, v[2] / l]
+    norm(sub(a, b))
 }

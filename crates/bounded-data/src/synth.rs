@@ -47,7 +47,6 @@ mod scan;
 mod scene;
 mod segments;
 mod shapes;
-mod vec3;
 
 pub use freeform::{BaseKind, FreeformSpec, generate_freeform};
 pub use perturb::NoiseDirection;
@@ -59,11 +58,11 @@ pub use shapes::ShapeKind;
 
 use crate::{DataError, LabelledCloud};
 use bounded_geom::PointCloud;
+use bounded_geom::vec3::{self, V3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::ops::RangeInclusive;
-use vec3::V3;
 
 /// The flavour of a generated set: which shapes and which sampling.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

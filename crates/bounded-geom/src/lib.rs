@@ -64,16 +64,18 @@ mod network;
 mod rotation;
 mod select;
 mod smallest;
+pub mod vec3;
 
 pub use class::Class;
 pub use cloud::{Frame, PointCloud};
 pub use distinct::Distinct;
-pub use eigen::{Eigen3, Sym3, cross, dot, eigenvalues_batch};
+pub use eigen::{Eigen3, Sym3, eigenvalues_batch};
 pub use error::GeomError;
 pub use knn::{KnnIndex, KnnSearch, NeighbourChunk};
 pub use morton::morton_order;
 pub use rotation::rotation_of_quaternion;
 pub use smallest::SmallestFirst;
+pub use vec3::{cross, dot};
 
 /// A 64-bit linear congruential stream for the tests.
 #[cfg(test)]

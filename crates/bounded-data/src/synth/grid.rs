@@ -5,7 +5,7 @@
 //! bounding box holds few enough cells (the fast case: most looked-up cells are empty, and
 //! an array answers that at once), else in a hash map.
 
-use super::vec3::{V3, norm, sub};
+use bounded_geom::vec3::{V3, norm, sub};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 

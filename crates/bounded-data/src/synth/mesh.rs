@@ -6,7 +6,7 @@
 //! that every edge between their faces stays far below that angle.
 
 use super::grid::{Grid, bounds};
-use super::vec3::{V3, cross, dot, norm, normalize, scale, sub};
+use bounded_geom::vec3::{V3, cross, dot, norm, normalize, scale, sub};
 
 /// Two faces meeting at more than this deviation from flat (degrees) form a sharp crease.
 ///
@@ -104,7 +104,7 @@ impl Mesh {
                     let b = ring[(i + 1) % ring.len()];
                     cross(self.vertices[a as usize], self.vertices[b as usize])
                 })
-                .fold([0.0; 3], super::vec3::add),
+                .fold([0.0; 3], bounded_geom::vec3::add),
         );
         let mut left: Vec<u32> = ring.to_vec();
         while left.len() > 3 {

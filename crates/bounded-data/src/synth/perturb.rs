@@ -5,8 +5,8 @@
 use super::grid::{Grid, bounds};
 use super::mesh::Mesh;
 use super::sample::random_direction;
-use super::vec3::{V3, add, cross, dot, norm, normalize, scale, sub};
 use bounded_geom::Class;
+use bounded_geom::vec3::{V3, add, cross, dot, norm, normalize, scale, sub};
 use rand::Rng;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
@@ -259,7 +259,7 @@ mod tests {
         assert_eq!(points.len(), 51);
         assert!(labels[1..].iter().all(|&c| c == Class::NonEdge));
         for p in &points[1..] {
-            let d = super::super::vec3::norm(*p);
+            let d = bounded_geom::vec3::norm(*p);
             assert!((3.0..10.0).contains(&d), "{d}");
         }
     }

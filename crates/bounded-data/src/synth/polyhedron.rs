@@ -2,7 +2,7 @@
 
 use super::mesh::Mesh;
 use super::sample::random_direction;
-use super::vec3::{V3, add, cross, dot, normalize, scale, sub};
+use bounded_geom::vec3::{V3, add, cross, dot, normalize, scale, sub};
 use rand::Rng;
 
 /// Cut planes stay at least this far (degrees) from every face's orientation, so each new

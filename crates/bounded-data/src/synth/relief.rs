@@ -16,9 +16,9 @@ use super::grid::bounds;
 use super::mesh::Polyline;
 use super::profile::P2;
 use super::segments::{CurveTree, SegmentIndex};
-use super::vec3::{V3, add, cross, dot, norm, normalize, scale, sub, tangent_frame};
 use crate::DataError;
 use bounded_geom::Class;
+use bounded_geom::vec3::{V3, add, cross, dot, norm, normalize, scale, sub, tangent_frame};
 
 /// What counts as a sharp feature of a free-form cloud, and how wide its label is; lengths
 /// are in units of the cloud's median nearest-neighbour spacing, measured on the clean

@@ -15,8 +15,8 @@
 use super::grid::{Grid, bounds};
 use super::mesh::{Features, Mesh, Polyline};
 use super::segments::SegmentIndex;
-use super::vec3::{V3, add, dot, lerp, norm, normalize, scale, sub};
 use bounded_geom::Class;
+use bounded_geom::vec3::{V3, add, dot, lerp, norm, normalize, scale, sub};
 use rand::Rng;
 use rand_distr::StandardNormal;
 

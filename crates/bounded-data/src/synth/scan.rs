@@ -13,7 +13,7 @@ use super::grid::Grid;
 use super::profile::P2;
 use super::relief::Relief;
 use super::sample::FILL_LEVELS;
-use super::vec3::{V3, norm, sub};
+use bounded_geom::vec3::{V3, norm, sub};
 use rand::Rng;
 use rand_distr::StandardNormal;
 

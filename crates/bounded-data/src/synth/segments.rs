@@ -3,7 +3,7 @@
 
 use super::grid::{Grid, bounds};
 use super::mesh::Polyline;
-use super::vec3::{V3, lerp, norm, segment_distance, segment_parameter, sub};
+use bounded_geom::vec3::{V3, lerp, norm, segment_distance, segment_parameter, sub};
 
 /// Polylines cut into pieces no longer than the query radius, bucketed by their midpoints.
 pub(crate) struct SegmentIndex {

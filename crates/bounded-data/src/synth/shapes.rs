@@ -7,7 +7,7 @@
 use super::mesh::Mesh;
 use super::polyhedron::Polyhedron;
 use super::profile::{P2, arc, extrude, revolve, round_corners, star_polygon};
-use super::vec3::{V3, segment_distance};
+use bounded_geom::vec3::{V3, segment_distance};
 use rand::Rng;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
