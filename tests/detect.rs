@@ -385,3 +385,23 @@ fn annotation_flags_choose_names_class_field_and_colours() {
         stderr(&bad)
     );
 }
+
+#[test]
+fn stale_temporary_files_in_the_output_directory_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.ply");
+    format::write(&input, &PointTable::new(box_cloud(2000, 9).cloud)).unwrap();
+    // What a run killed while writing leaves behind, and a file that only looks alike.
+    let stale = dir.path().join(".bounded-0123456789abcdef.part");
+    std::fs::write(&stale, b"partial").unwrap();
+    std::fs::write(dir.path().join(".bounded-notes.txt"), b"").unwrap();
+    let run = bounded_paths(&[&"detect", &input, &"-o", &dir.path().join("out.ply")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(
+        err.contains(&format!("note: {} is the temporary file", stale.display())),
+        "{err}"
+    );
+    assert_eq!(err.matches("note:").count(), 1, "{err}");
+    assert!(stale.exists(), "never removed without asking");
+}

@@ -401,6 +401,10 @@ mod tests {
                 "generated:cad:1:-3",
                 "shape count must be a whole number above 0",
             ),
+            (
+                "generated:mixed:1:99999999999",
+                "more than the 10000 a set may have",
+            ),
         ] {
             let e = SetConfig::from_spec(spec).unwrap_err();
             assert!(matches!(e, DataError::Generator { .. }), "{spec}: {e}");

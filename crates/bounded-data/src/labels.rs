@@ -8,8 +8,12 @@
 //! | [`Convention::Bazazian`] | red (255,0,0), yellow (255,255,0) | white | |
 //! | [`Convention::ClassProperty`] | `class`/`scalar_class`/`label` = 1 | 0 | 2 boundary |
 //!
+//! Without such a property, [`Convention::ClassProperty`] reads a LAS output's Classification
+//! when it holds only BoundED's default codes (1 non-edge, 64 sharp, 65 boundary).
+//!
 //! Any other colour or value is an error naming the point, never a silent guess.
 
+use crate::las::{CODE_BOUNDARY, CODE_NON_EDGE, CODE_SHARP};
 use crate::table::{Column, PointTable};
 use crate::{DataError, LabelledCloud};
 use bounded_geom::Class;
@@ -117,7 +121,13 @@ pub fn class_column(table: &PointTable) -> Option<&Column> {
 }
 
 fn by_class(table: &PointTable) -> Result<Vec<Class>, String> {
-    let column = class_column(table).ok_or("no 'class' or 'label' property")?;
+    let Some(column) = class_column(table) else {
+        return by_las_codes(table).ok_or_else(|| {
+            "no 'class', 'scalar_class' or 'label' property, nor a LAS Classification of \
+             only BoundED's codes"
+                .into()
+        });
+    };
     (0..table.len())
         .map(|i| {
             let v = column.get_f64(i);
@@ -125,6 +135,20 @@ fn by_class(table: &PointTable) -> Result<Vec<Class>, String> {
                 .then(|| Class::from_code(v as u8))
                 .flatten()
                 .ok_or_else(|| format!("point {i} has class {v}; expected 0, 1 or 2"))
+        })
+        .collect()
+}
+
+/// The classes of a LAS output whose Classification holds only BoundED's default codes
+/// ([`CODE_NON_EDGE`], [`CODE_SHARP`], [`CODE_BOUNDARY`]); `None` otherwise.
+fn by_las_codes(table: &PointTable) -> Option<Vec<Class>> {
+    let column = table.property("classification")?;
+    (0..table.len())
+        .map(|i| match column.get_f64(i) {
+            v if v == f64::from(CODE_NON_EDGE) => Some(Class::NonEdge),
+            v if v == f64::from(CODE_SHARP) => Some(Class::Sharp),
+            v if v == f64::from(CODE_BOUNDARY) => Some(Class::Boundary),
+            _ => None,
         })
         .collect()
 }
@@ -191,5 +215,20 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(msg.contains("point 1 has class 3"), "{msg}");
+    }
+
+    #[test]
+    fn las_classification_of_our_codes_only() {
+        let p = Path::new("c.las");
+        let mut t = table(&[[0, 0, 0]; 3]);
+        t.set_property(Property::new("classification", Column::U8(vec![65, 1, 64])));
+        let l = from_table(t.clone(), Convention::ClassProperty, p).unwrap();
+        assert_eq!(l.labels, [Class::Boundary, Class::NonEdge, Class::Sharp]);
+        // Ground (2) is not one of ours: no guess.
+        t.set_property(Property::new("classification", Column::U8(vec![65, 2, 64])));
+        let msg = from_table(t, Convention::ClassProperty, p)
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("nor a LAS Classification"), "{msg}");
     }
 }

@@ -17,6 +17,6 @@ mod canvas;
 mod plot;
 mod render;
 
-pub use canvas::{Canvas, Rgb};
+pub use canvas::{Canvas, Rgb, check_png};
 pub use plot::{PALETTE, Series, precision_recall};
 pub use render::{View, render, render_classes};

@@ -64,6 +64,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::ops::RangeInclusive;
 
+/// The most shapes a set may have: its clouds are held in memory together.
+pub const MAX_SHAPES: usize = 10_000;
+
 /// The flavour of a generated set: which shapes and which sampling.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SetKind {
@@ -183,6 +186,15 @@ impl SetConfig {
     /// Checks the noise levels, the outlier fraction and the label rule; [`generate`]
     /// does, so a caller writing files can check before creating any.
     pub fn validate(&self) -> Result<(), DataError> {
+        if self.shapes > MAX_SHAPES {
+            return Err(DataError::Generator {
+                what: format!(
+                    "{} shapes are more than the {MAX_SHAPES} a set may have (about 2 x 10^8 \
+                     points, held in memory together)",
+                    self.shapes
+                ),
+            });
+        }
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
         check_outlier_fraction(self.outlier_fraction)?;
         self.label_rule.validate()
@@ -467,7 +479,9 @@ impl SetConfig {
         let seed = seed.parse().map_err(|_| bad("bad seed"))?;
         let shapes = (shapes.parse().ok().filter(|&n: &usize| n > 0))
             .ok_or_else(|| bad("the shape count must be a whole number above 0"))?;
-        Ok(SetConfig::new(SetKind::from_name(kind)?, seed, shapes))
+        let config = SetConfig::new(SetKind::from_name(kind)?, seed, shapes);
+        config.validate()?;
+        Ok(config)
     }
 
     /// This set with noise `levels` (when given; else its own) along `direction`, checked.

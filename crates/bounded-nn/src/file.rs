@@ -432,6 +432,12 @@ pub(crate) mod tests {
         let mut file = random_file(4, 12, 1);
         file.model.hidden_widths = vec![1 << 40, 1 << 40];
         let e = ModelFile::from_bytes(&file.to_bytes().unwrap()).unwrap_err();
+        assert!(e.to_string().contains("above the largest allowed"), "{e}");
+        // Within the width bound, 2^32 scales of 2^32 features still overflow.
+        let mut file = random_file(4, 12, 1);
+        file.model.n_scales = 1 << 32;
+        file.model.features_per_scale = 1 << 32;
+        let e = ModelFile::from_bytes(&file.to_bytes().unwrap()).unwrap_err();
         assert!(e.to_string().contains("sizes overflow"), "{e}");
     }
 

@@ -238,6 +238,8 @@ pub fn fit_stages(
         features: 0.0,
         training: 0.0,
     };
+    // Refused before the features are computed, not after.
+    widths.model(config, false).validate()?;
     let t = Instant::now();
     let set = feature_set(clouds, config, None, progress)?;
     seconds.features += t.elapsed().as_secs_f64();

@@ -18,6 +18,10 @@ use bounded_geom::Class;
 use crate::backend::read_f32;
 use crate::{NnError, Standardisation};
 
+/// The widest layer a configuration may have: 4096 inputs by 4096 outputs are 16.8M weights
+/// (64 MiB), far beyond any useful width for 48 features yet safe to allocate.
+const MAX_WIDTH: usize = 4096;
+
 /// Number of output classes: non-edge, sharp edge, boundary.
 pub const N_CLASSES: usize = Class::ALL.len();
 
@@ -77,6 +81,14 @@ impl ModelConfig {
             return bad(format!(
                 "hidden widths must be positive: {:?}",
                 self.hidden_widths
+            ));
+        }
+        if let Some(w) =
+            (self.fusion_widths.iter().chain(&self.hidden_widths)).find(|&&w| w > MAX_WIDTH)
+        {
+            return bad(format!(
+                "a layer width of {w} is above the largest allowed, {MAX_WIDTH} (the paper's \
+                 network is 16-48 wide; a layer's weights grow as the square of its width)"
             ));
         }
         if !(0.0..1.0).contains(&self.dropout) {
@@ -468,6 +480,18 @@ mod tests {
                 .validate()
                 .is_err()
         );
+        // Widths up to the bound build; beyond it they are refused before any allocation.
+        let wide = |fusion, hidden| {
+            ModelConfig::new(4, 12)
+                .with_fusion_widths(vec![fusion])
+                .with_hidden_widths(vec![hidden])
+                .validate()
+        };
+        assert!(wide(MAX_WIDTH, MAX_WIDTH).is_ok());
+        for (fusion, hidden) in [(MAX_WIDTH + 1, 16), (16, 100_000_000), (1_000_000_000, 16)] {
+            let e = wide(fusion, hidden).unwrap_err().to_string();
+            assert!(e.contains("above the largest allowed, 4096"), "{e}");
+        }
         let config = ModelConfig::new(4, 12);
         let weights = config.random_weights(&mut StdRng::seed_from_u64(0));
         let device = cpu_device();

@@ -41,6 +41,25 @@ pub fn run(args: &DetectArgs) -> Result<()> {
         detecting += detection.elapsed;
     }
 
+    // A run killed outright (SIGKILL) leaves its temporary file behind: name those found.
+    let mut directories: Vec<&Path> = (outputs.iter())
+        .map(|o| {
+            o.parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+        })
+        .collect();
+    directories.dedup();
+    for stale in directories
+        .into_iter()
+        .flat_map(bounded_geom::atomic::stale_temporaries)
+    {
+        eprintln!(
+            "note: {} is the temporary file of an interrupted run; remove it unless another \
+             run is writing there now",
+            stale.display()
+        );
+    }
     let [non_edge, sharp, boundary] = counts;
     let seconds = start.elapsed().as_secs_f64();
     let memory = peak_memory().map_or(String::new(), |m| format!(", peak memory {m}"));

@@ -4,7 +4,7 @@ use crate::cli::{ColourBy, RenderArgs};
 use crate::pipeline;
 use anyhow::{Context, Result, bail};
 use bounded_data::labels::{self, Convention};
-use bounded_data::picture::{View, render_classes};
+use bounded_data::picture::{self, View, render_classes};
 use bounded_data::{dataset, format};
 use bounded_geom::Class;
 
@@ -19,18 +19,18 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Some(&[azimuth, elevation]) => View { azimuth, elevation },
         _ => View::default(),
     };
+    picture::check_png(&args.output)?;
     let table = format::read(&args.input)?;
     let classes = match args.by {
-        ColourBy::Class => {
-            if labels::class_column(&table).is_none() {
-                bail!(
-                    "{}: no 'class' property to colour by; --by detect runs detection first, \
-                     --by truth reads PCEDNet or Bazazian label colours",
-                    args.input.display()
-                );
-            }
-            labels::from_table(table.clone(), Convention::ClassProperty, &args.input)?.labels
-        }
+        ColourBy::Class => (labels::from_table(
+            table.clone(),
+            Convention::ClassProperty,
+            &args.input,
+        ))
+        .context(
+            "--by detect runs detection first, --by truth reads PCEDNet or Bazazian label colours",
+        )?
+        .labels,
         ColourBy::Truth => dataset::read_labelled(&args.input, Class::NonEdge)?.labels,
         ColourBy::Detect => {
             let detector = pipeline::detector(&Default::default())?;

@@ -109,6 +109,7 @@ impl Canvas {
     /// Writes the canvas as an 8-bit RGB PNG, atomically: a failure leaves no file (and an
     /// existing one untouched).
     pub fn save_png(&self, path: &Path) -> Result<(), DataError> {
+        check_png(path)?;
         let png = |source| DataError::Png {
             path: path.to_path_buf(),
             source,
@@ -124,6 +125,19 @@ impl Canvas {
             out.flush().map_err(|e| DataError::io(path, e))
         })
     }
+}
+
+/// Refuses an output path not ending in `.png` (any case): pictures are PNG only, and a
+/// `.jpg` name on PNG bytes would mislead every viewer.
+pub fn check_png(path: &Path) -> Result<(), DataError> {
+    let png = (path.extension()).is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if png {
+        return Ok(());
+    }
+    Err(DataError::InvalidOutput {
+        path: path.to_path_buf(),
+        what: "pictures are written as PNG: name the output .png".into(),
+    })
 }
 
 /// The 5x7 bitmap of `ch`: seven rows, bit 4 is the leftmost column.
@@ -236,5 +250,12 @@ mod tests {
             "{e}"
         );
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+
+        // Only .png names: a .jpg name on PNG bytes is refused before anything is written.
+        let jpg = dir.path().join("c.jpg");
+        let e = c.save_png(&jpg).unwrap_err().to_string();
+        assert!(e.contains("pictures are written as PNG"), "{e}");
+        assert!(!jpg.exists());
+        c.save_png(&dir.path().join("C.PNG")).unwrap();
     }
 }

@@ -6,7 +6,8 @@
 
 use super::{Canvas, Rgb};
 use crate::format::class_colour;
-use bounded_geom::{Class, PointCloud, cross, dot};
+use bounded_geom::vec3::{cross, dot, normalize};
+use bounded_geom::{Class, PointCloud};
 
 /// Where the camera looks from.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -28,7 +29,8 @@ impl Default for View {
 }
 
 /// The picture of `cloud` with every point in the colour of its class (as
-/// [`class_colour`] writes them).
+/// [`class_colour`] writes them), and a legend of the classes with their point counts in the
+/// top left corner.
 pub fn render_classes(
     cloud: &PointCloud,
     classes: &[Class],
@@ -37,7 +39,20 @@ pub fn render_classes(
     height: usize,
 ) -> Canvas {
     let colours: Vec<Rgb> = classes.iter().map(|&c| class_colour(c)).collect();
-    render(cloud.points(), &colours, view, width, height)
+    let mut canvas = render(cloud.points(), &colours, view, width, height);
+    let counts = Class::counts(classes);
+    let scale = if height >= 400 { 2 } else { 1 };
+    let line = 10 * scale;
+    for (row, class) in [Class::Sharp, Class::Boundary, Class::NonEdge]
+        .into_iter()
+        .enumerate()
+    {
+        let y = line / 2 + row as i64 * line;
+        canvas.disc(line / 2 + 2, y + 3 * scale, 3 * scale, class_colour(class));
+        let label = format!("{} {}", class.name(), counts[class as usize]);
+        canvas.text(line + 4, y, &label, scale, [0, 0, 0]);
+    }
+    canvas
 }
 
 /// Renders `points` with per-point `colours` into a `width` x `height` picture.
@@ -102,7 +117,7 @@ pub fn render(
         }
     }
     // Lambert shading from screen-space depth gradients, light from the upper left.
-    let light = normalise([-0.4, 0.5, 1.0]);
+    let light = normalize([-0.4, 0.5, 1.0]);
     for y in 0..height {
         for x in 0..width {
             let i = y * width + x;
@@ -123,7 +138,7 @@ pub fn render(
                 (y + 1 < height).then(|| i + width),
                 y.checked_sub(1).map(|y| y * width + x),
             );
-            let normal = normalise([-gx, -gy, 1.0]);
+            let normal = normalize([-gx, -gy, 1.0]);
             let shade = 0.35 + 0.65 * dot(normal, light).max(0.0);
             let [r, g, b] = colour[i];
             canvas.set(
@@ -134,11 +149,6 @@ pub fn render(
         }
     }
     canvas
-}
-
-fn normalise(a: [f64; 3]) -> [f64; 3] {
-    let n = dot(a, a).sqrt();
-    a.map(|v| v / n)
 }
 
 #[cfg(test)]
@@ -160,10 +170,32 @@ mod tests {
         };
         let c = render(&points, &colours, view, 100, 100);
         let [r, g, b] = c.get(50, 50);
-        let lit = 0.35 + 0.65 * normalise([-0.4, 0.5, 1.0])[2];
+        let lit = 0.35 + 0.65 * normalize([-0.4, 0.5, 1.0])[2];
         assert_eq!(r, (200.0 * lit).round() as u8);
         assert_eq!((g, b), (0, 0));
         assert_eq!(c.get(1, 1), [255, 255, 255]);
+    }
+
+    /// The legend names each class beside a disc of its colour, top left, over the cloud.
+    #[test]
+    fn classes_come_with_a_legend() {
+        let cloud = PointCloud::from_f64(&[[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]).unwrap();
+        let c = render_classes(&cloud, &[Class::Sharp; 2], View::default(), 100, 100);
+        // Rows of 10 pixels from y = 5; each disc centred 3 pixels below its row's top.
+        assert_eq!(c.get(7, 8), class_colour(Class::Sharp));
+        assert_eq!(c.get(7, 18), class_colour(Class::Boundary));
+        assert_eq!(c.get(7, 28), class_colour(Class::NonEdge));
+        // "sharp 2" in black to the right of the first disc.
+        let black = (14..60).flat_map(|x| (5..12).map(move |y| (x, y)));
+        assert!(black.clone().any(|(x, y)| c.get(x, y) == [0, 0, 0]));
+        let plain = render(
+            cloud.points(),
+            &[class_colour(Class::Sharp); 2],
+            View::default(),
+            100,
+            100,
+        );
+        assert!(black.into_iter().all(|(x, y)| plain.get(x, y) != [0, 0, 0]));
     }
 
     /// The nearer of two overlapping points wins the depth test.
