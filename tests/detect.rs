@@ -405,3 +405,38 @@ fn stale_temporary_files_in_the_output_directory_are_named() {
     assert_eq!(err.matches("note:").count(), 1, "{err}");
     assert!(stale.exists(), "never removed without asking");
 }
+
+#[test]
+fn standard_input_and_output_give_the_file_results() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in.ply"), dir.path().join("out.ply"));
+    format::write(&input, &PointTable::new(box_cloud(2500, 11).cloud)).unwrap();
+    let run = bounded_paths(&[&"detect", &input, &"-o", &output]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let piped = |args: &[&str]| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_bounded"))
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let bytes = std::fs::read(&input).unwrap();
+        child.stdin.take().unwrap().write_all(&bytes).unwrap();
+        child.wait_with_output().unwrap()
+    };
+    // PLY from its first bytes, written as PLY: the file run's bytes.
+    let out = piped(&["detect", "-", "-o", "-", "--format", "ply"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(out.stdout, std::fs::read(&output).unwrap());
+    // Standard output needs a format when the input has no extension.
+    let out = piped(&["detect", "-", "-o", "-"]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("--format names its format"),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -69,18 +69,20 @@ pub enum Command {
 /// Arguments of `detect`.
 #[derive(Debug, Args)]
 pub struct DetectArgs {
-    /// Input clouds (.ply .pcd .xyz .txt .csv .las .laz .e57). Several (the tiles of a
-    /// survey, say) are labelled as one cloud, so neighbourhoods reach across their seams,
-    /// and written one output each; `--separate` labels each on its own.
+    /// Input clouds (.ply .pcd .xyz .txt .csv .las .laz .e57 .npy), or `-` for standard
+    /// input (its format from its first bytes). Several (the tiles of a survey, say) are
+    /// labelled as one cloud, so neighbourhoods reach across their seams, and written one
+    /// output each; `--separate` labels each on its own.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Output cloud (.ply .pcd .xyz .txt .csv .las .laz .e57; the format follows the
-    /// extension), or a directory (created if missing; for one input, an existing one or a
-    /// path ending in /) where each input is written under its own file name.
+    /// extension), `-` for standard output (in `--format`, else the input's format), or a
+    /// directory (created if missing; for one input, an existing one or a path ending in /)
+    /// where each input is written under its own file name.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// With a directory output: write every cloud in this format (an extension such as
-    /// las or ply) instead of its input's.
+    /// With a directory output or `-o -`: write every cloud in this format (an extension
+    /// such as las or ply) instead of its input's.
     #[arg(long, value_name = "EXT")]
     pub format: Option<String>,
     #[command(flatten)]

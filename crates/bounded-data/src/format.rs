@@ -63,6 +63,27 @@ pub enum Format {
 }
 
 impl Format {
+    /// The format whose signature `head` (a file's first bytes) starts with: PLY (`ply`),
+    /// LAS (`LASF`; LAZ is read by the same reader), E57 (`ASTM-E57`), NumPy (`\x93NUMPY`),
+    /// PCD (a `VERSION` or `FIELDS` line after any `#` comment lines); anything else is
+    /// taken as text (such as xyz with a `#` header), whose reader names what it cannot parse.
+    pub fn sniff(head: &[u8]) -> Format {
+        let text = |t: &str| head.starts_with(t.as_bytes());
+        if text("ply") {
+            Format::Ply
+        } else if text("LASF") {
+            Format::Las { compressed: false }
+        } else if text("ASTM-E57") {
+            Format::E57
+        } else if head.starts_with(b"\x93NUMPY") {
+            Format::Npy
+        } else if pcd_header(head) {
+            Format::Pcd
+        } else {
+            Format::Xyz(crate::xyz::Separator::Space)
+        }
+    }
+
     /// The format named by `path`'s extension (case-insensitive).
     pub fn from_path(path: &Path) -> Result<Format, DataError> {
         let ext = path
@@ -85,6 +106,14 @@ impl Format {
     }
 }
 
+/// Whether the first line of `head` that is not a `#` comment starts a PCD header.
+fn pcd_header(head: &[u8]) -> bool {
+    let mut lines = head.split(|&b| b == b'\n');
+    lines
+        .find(|l| !l.starts_with(b"#"))
+        .is_some_and(|l| l.starts_with(b"VERSION") || l.starts_with(b"FIELDS"))
+}
+
 /// Reads the cloud at `path`, in the format named by its extension, with every property.
 ///
 /// A point with a NaN or infinite coordinate is an error naming it; [`read_finite`] leaves
@@ -103,11 +132,25 @@ pub fn read_finite(path: &Path) -> Result<(PointTable, usize), DataError> {
 /// Reads a cloud in `format` from `input` (standard input, say), which is read to its end
 /// first, since the LAS and E57 readers seek; `name` names it in errors.
 pub fn read_from(input: impl Read, format: Format, name: &Path) -> Result<PointTable, DataError> {
+    read_stream(input, Some(format), false, name).map(|(table, _, _)| table)
+}
+
+/// Reads a cloud from `input` like [`read_from`], in `format` or, without one, in the format
+/// its first bytes name ([`Format::sniff`]); `drop_non_finite` as for [`read_finite`].
+/// Returns the table, the format read and how many points were left out.
+pub fn read_stream(
+    input: impl Read,
+    format: Option<Format>,
+    drop_non_finite: bool,
+    name: &Path,
+) -> Result<(PointTable, Format, usize), DataError> {
     let mut bytes = Vec::new();
     BufReader::new(input)
         .read_to_end(&mut bytes)
         .map_err(|e| DataError::io(name, e))?;
-    read_source(Cursor::new(bytes), format, name, false).map(|(table, _)| table)
+    let format = format.unwrap_or_else(|| Format::sniff(&bytes));
+    let (table, dropped) = read_source(Cursor::new(bytes), format, name, drop_non_finite)?;
+    Ok((table, format, dropped))
 }
 
 /// Reads `path`; with `drop_non_finite`, points with a non-finite coordinate are left out
@@ -288,6 +331,38 @@ mod tests {
             "{e}"
         );
         assert!(Format::from_path(Path::new("noext")).is_err());
+    }
+
+    #[test]
+    fn streams_are_read_in_the_format_their_first_bytes_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = sample();
+        for ext in ["ply", "pcd", "xyz", "csv", "las", "laz", "e57"] {
+            let path = dir.path().join(format!("s.{ext}"));
+            write(&path, &t).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            let (back, format, dropped) =
+                read_stream(bytes.as_slice(), None, false, Path::new("-")).unwrap();
+            let expected = match Format::from_path(&path).unwrap() {
+                Format::Las { .. } => Format::Las { compressed: false },
+                Format::Xyz(_) => Format::Xyz(crate::xyz::Separator::Space),
+                f => f,
+            };
+            assert_eq!((format, dropped), (expected, 0), "{ext}");
+            assert_eq!(positions(&back), positions(&read(&path).unwrap()), "{ext}");
+        }
+        let xyz = b"# x y z\n1 2 3\n4 5 6\n";
+        assert_eq!(
+            Format::sniff(xyz),
+            Format::Xyz(crate::xyz::Separator::Space)
+        );
+        assert_eq!(Format::sniff(b"# .PCD v0.7\nVERSION 0.7\n"), Format::Pcd);
+        let mut npy = b"\x93NUMPY".to_vec();
+        npy.extend([1, 0]);
+        assert_eq!(Format::sniff(&npy), Format::Npy);
+        // Anything unrecognised goes to the text reader, which names what it cannot parse.
+        let e = read_stream(&b"\x00\x01binary"[..], None, false, Path::new("-")).unwrap_err();
+        assert!(e.to_string().starts_with("-:"), "{e}");
     }
 
     /// Every position as the writers see it.

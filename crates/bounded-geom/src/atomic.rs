@@ -142,12 +142,39 @@ pub fn stale_temporaries(dir: &Path) -> Vec<PathBuf> {
     stale
 }
 
+/// Whether `a` and `b` name one existing file (by device and inode on Unix, so a hard link
+/// or another spelling of the path counts too), as when an output would replace its input.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        #[cfg(unix)]
+        (Ok(a), Ok(b)) => {
+            use std::os::unix::fs::MetadataExt;
+            (a.dev(), a.ino()) == (b.dev(), b.ino())
+        }
+        #[cfg(not(unix))]
+        (Ok(_), Ok(_)) => a.canonicalize().ok() == b.canonicalize().ok(),
+        _ => false,
+    }
+}
+
 /// The directory that holds `path` (`.` for a bare file name).
 fn directory(path: &Path) -> &Path {
     match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     }
+}
+
+/// The [`stale_temporaries`] of the directories that hold `paths` (outputs, say), each
+/// directory listed once.
+pub fn stale_temporaries_beside(paths: &[&Path]) -> Vec<PathBuf> {
+    let mut directories: Vec<&Path> = paths.iter().map(|p| directory(p)).collect();
+    directories.sort();
+    directories.dedup();
+    directories
+        .into_iter()
+        .flat_map(stale_temporaries)
+        .collect()
 }
 
 fn same_file_name(a: &Path, b: &Path) -> bool {
@@ -307,6 +334,23 @@ mod tests {
     }
 
     #[test]
+    fn same_file_by_identity_not_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+        std::fs::write(&a, b"x").unwrap();
+        std::fs::write(&b, b"x").unwrap();
+        assert!(same_file(&a, &dir.path().join(".").join("a")));
+        assert!(!same_file(&a, &b));
+        assert!(!same_file(&a, &dir.path().join("missing")));
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("hard");
+            std::fs::hard_link(&a, &link).unwrap();
+            assert!(same_file(&a, &link));
+        }
+    }
+
+    #[test]
     fn writes_new_and_replaces_existing_files_leaving_only_them() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.bin");
@@ -448,5 +492,8 @@ mod tests {
             stale_temporaries(&dir.path().join("none")),
             Vec::<PathBuf>::new()
         );
+        // Beside outputs: each directory once.
+        let (a, b) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
+        assert_eq!(stale_temporaries_beside(&[&a, &b]), stale);
     }
 }

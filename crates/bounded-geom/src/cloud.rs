@@ -186,6 +186,24 @@ impl PointCloud {
         Self::from_iter_f64(positions.len(), |i| positions[i])
     }
 
+    /// The clouds of `parts` as one, in order (the tiles of a survey labelled together).
+    ///
+    /// Fails on no points at all.
+    pub fn concat(parts: &[&PointCloud]) -> Result<Self, GeomError> {
+        let starts: Vec<usize> = (parts.iter())
+            .scan(0, |next, c| {
+                let first = *next;
+                *next += c.len();
+                Some(first)
+            })
+            .collect();
+        let n = parts.iter().map(|c| c.len()).sum();
+        Self::from_iter_f64(n, |i| {
+            let k = starts.partition_point(|&s| s <= i) - 1;
+            parts[k].position_f64(i - starts[k])
+        })
+    }
+
     /// Builds a cloud from `len` absolute positions produced by `position(i)`.
     ///
     /// Lets readers hand over positions without building an intermediate `Vec`.
@@ -311,6 +329,24 @@ mod tests {
         let d = c.points()[1][0] - c.points()[0][0];
         assert!((d - 0.001).abs() < 1e-6, "{d}");
         assert!((c.position_f64(1)[0] - 5_403_150.001).abs() < 1e-6);
+    }
+
+    #[test]
+    fn concat_keeps_every_position_in_order() {
+        let a = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+        let b = [[5_403_150.25, 0.5, -1.0]];
+        let (ca, cb) = (
+            PointCloud::from_f64(&a).unwrap(),
+            PointCloud::from_f64(&b).unwrap(),
+        );
+        let joined = PointCloud::concat(&[&ca, &cb, &ca]).unwrap();
+        let back: Vec<[f64; 3]> = (0..joined.len()).map(|i| joined.position_f64(i)).collect();
+        let expected: Vec<[f64; 3]> = a.iter().chain(&b).chain(&a).copied().collect();
+        for (p, q) in back.iter().zip(&expected) {
+            assert!((0..3).all(|k| (p[k] - q[k]).abs() < 1e-6), "{p:?} {q:?}");
+        }
+        assert_eq!(back.len(), 5);
+        assert!(matches!(PointCloud::concat(&[]), Err(GeomError::Empty)));
     }
 
     /// `n` points of the unit cube, pseudo-random.

@@ -42,18 +42,11 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     }
 
     // A run killed outright (SIGKILL) leaves its temporary file behind: name those found.
-    let mut directories: Vec<&Path> = (outputs.iter())
-        .map(|o| {
-            o.parent()
-                .filter(|p| !p.as_os_str().is_empty())
-                .unwrap_or(Path::new("."))
-        })
-        .collect();
-    directories.dedup();
-    for stale in directories
+    let files: Vec<&Path> = written_to
         .into_iter()
-        .flat_map(bounded_geom::atomic::stale_temporaries)
-    {
+        .filter(|o| *o != Path::new("-"))
+        .collect();
+    for stale in bounded_geom::atomic::stale_temporaries_beside(&files) {
         eprintln!(
             "note: {} is the temporary file of an interrupted run; remove it unless another \
              run is writing there now",
@@ -98,7 +91,10 @@ fn label(
     }
     let detection = match tables.as_slice() {
         [table] => pipeline::detect(detector, &table.cloud, true),
-        _ => pipeline::detect(detector, &joined(&tables)?, true),
+        _ => {
+            let clouds: Vec<&PointCloud> = tables.iter().map(|t| &t.cloud).collect();
+            pipeline::detect(detector, &PointCloud::concat(&clouds)?, true)
+        }
     }
     .with_context(|| {
         let names: Vec<_> = inputs.iter().map(|p| p.display().to_string()).collect();
@@ -122,7 +118,21 @@ fn label(
             colours: args.colours,
             flavour: args.flavour,
         };
-        let written = format::write_annotated_with(output, table, classes, probabilities, &options);
+        let written = match stdout_format(args, output)? {
+            Some(f) => {
+                let stdout = std::io::stdout().lock();
+                format::write_annotated_to(
+                    stdout,
+                    f,
+                    output,
+                    table,
+                    classes,
+                    probabilities,
+                    &options,
+                )
+            }
+            None => format::write_annotated_with(output, table, classes, probabilities, &options),
+        };
         if let Err(e) = written {
             writing.finish_and_clear();
             let done: Vec<_> = outputs[..k]
@@ -149,7 +159,10 @@ fn label(
 /// points with a non-finite coordinate.
 fn read(input: &Path, drop_non_finite: bool) -> Result<PointTable> {
     let reading = progress::spinner("read");
-    let read = if drop_non_finite {
+    let read = if input == Path::new("-") {
+        let stdin = std::io::stdin().lock();
+        format::read_stream(stdin, None, drop_non_finite, input).map(|(t, _, n)| (t, n))
+    } else if drop_non_finite {
         format::read_finite(input)
     } else {
         format::read(input).map(|table| (table, 0))
@@ -172,23 +185,6 @@ fn read(input: &Path, drop_non_finite: bool) -> Result<PointTable> {
     Ok(table)
 }
 
-/// The clouds of `tables` as one, in order (for features only: each output keeps its own
-/// table's positions).
-fn joined(tables: &[PointTable]) -> Result<PointCloud> {
-    let starts: Vec<usize> = (tables.iter())
-        .scan(0, |next, t| {
-            let first = *next;
-            *next += t.len();
-            Some(first)
-        })
-        .collect();
-    let n = tables.iter().map(PointTable::len).sum();
-    Ok(PointCloud::from_iter_f64(n, |i| {
-        let k = starts.partition_point(|&s| s <= i) - 1;
-        tables[k].cloud.position_f64(i - starts[k])
-    })?)
-}
-
 /// Where each input's result goes, and whether into a directory: `--output` for one input,
 /// unless it is a directory (or ends with a separator); else a file of the input's name in
 /// that directory, which is created only when the results are written, so a failed run
@@ -197,6 +193,16 @@ fn joined(tables: &[PointTable]) -> Result<PointCloud> {
 /// input replaced by another's result.
 fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
     let output = &args.output;
+    if output == Path::new("-") {
+        if args.inputs.len() != 1 {
+            bail!(
+                "-o - (standard output) takes one input, not {}",
+                args.inputs.len()
+            );
+        }
+        stdout_format(args, output)?;
+        return Ok((vec![output.clone()], false));
+    }
     let names_directory =
         output.is_dir() || (output.to_str()).is_some_and(|s| s.ends_with(std::path::is_separator));
     if args.inputs.len() == 1 && !names_directory {
@@ -259,10 +265,23 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
     Ok((outputs, true))
 }
 
+/// The format of `output` when it is `-` (standard output): `--format`, else the input's.
+fn stdout_format(args: &DetectArgs, output: &Path) -> Result<Option<Format>> {
+    if output != Path::new("-") {
+        return Ok(None);
+    }
+    let named = match (&args.format, args.inputs[0].as_path()) {
+        (Some(ext), _) => Path::new("-").with_extension(ext.trim_start_matches('.')),
+        (None, input) if input != Path::new("-") => input.to_path_buf(),
+        _ => bail!("standard output has no extension: --format names its format (ply, las, ...)"),
+    };
+    Ok(Some(Format::from_path(&named)?))
+}
+
 /// Refuses an `output` that is `input` itself (by file identity, so a hard link or another
 /// spelling of the path counts too): the result would replace the data it is computed from.
 fn refuse_replacing_input(input: &Path, output: &Path) -> Result<()> {
-    if same_file(input, output) {
+    if bounded_geom::atomic::same_file(input, output) {
         bail!(
             "{}: the output {} is this input; its result would replace it (choose another \
              output or --format)",
@@ -271,20 +290,6 @@ fn refuse_replacing_input(input: &Path, output: &Path) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// Whether `a` and `b` name one existing file.
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (std::fs::metadata(a), std::fs::metadata(b)) {
-        #[cfg(unix)]
-        (Ok(a), Ok(b)) => {
-            use std::os::unix::fs::MetadataExt;
-            (a.dev(), a.ino()) == (b.dev(), b.ino())
-        }
-        #[cfg(not(unix))]
-        (Ok(_), Ok(_)) => a.canonicalize().ok() == b.canonicalize().ok(),
-        _ => false,
-    }
 }
 
 /// Fails now, before any work, when no file can be created in `directory`.
