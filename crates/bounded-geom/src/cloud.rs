@@ -334,7 +334,7 @@ mod tests {
     #[test]
     fn concat_keeps_every_position_in_order() {
         let a = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
-        let b = [[5_403_150.25, 0.5, -1.0]];
+        let b = [[10.25, 0.5, -1.0]];
         let (ca, cb) = (
             PointCloud::from_f64(&a).unwrap(),
             PointCloud::from_f64(&b).unwrap(),
