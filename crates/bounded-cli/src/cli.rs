@@ -70,9 +70,10 @@ pub enum Command {
 #[derive(Debug, Args)]
 pub struct DetectArgs {
     /// Input clouds (.ply .pcd .xyz .txt .csv .las .laz .e57 .npy), or `-` for standard
-    /// input (its format from its first bytes). Several (the tiles of a survey, say) are
-    /// labelled as one cloud, so neighbourhoods reach across their seams, and written one
-    /// output each; `--separate` labels each on its own.
+    /// input (its format from its first bytes). Several (the tiles of a survey, say) get the
+    /// labels of one cloud, neighbourhoods reaching across their seams: one tile at a time,
+    /// with the points of its neighbours nearby, each written before the next; `--separate`
+    /// labels each on its own.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Output cloud (.ply .pcd .xyz .txt .csv .las .laz .e57; the format follows the

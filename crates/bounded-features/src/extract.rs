@@ -60,6 +60,7 @@ pub struct FeatureBlock {
     pub(crate) per_point: usize,
     pub(crate) points: Vec<u32>,
     pub(crate) values: Vec<f32>,
+    pub(crate) reach: Vec<f32>,
 }
 
 impl FeatureBlock {
@@ -91,6 +92,19 @@ impl FeatureBlock {
     /// All values, row-major in block order (`len() x per_point()`).
     pub fn values(&self) -> &[f32] {
         &self.values
+    }
+
+    /// Per point, in block order, how far its values reach: every position they were
+    /// computed from lies within this distance of the point (in the cloud's offsets,
+    /// rounded to `f32`). For features, with or without a given context, it is the distance
+    /// of the point's `k0`-th neighbour; for the second stage of
+    /// [`extract_chunks_staged`](crate::extract_chunks_staged), that plus the largest such
+    /// distance among its neighbours, whose first-stage results its context reads. A caller
+    /// that holds only part of a larger cloud knows a point's values are those of the whole
+    /// cloud when every point of the whole cloud within (a little more than) its reach is
+    /// held: the neighbour search is exact, ties broken by index.
+    pub fn reach(&self) -> &[f32] {
+        &self.reach
     }
 }
 
@@ -215,10 +229,12 @@ pub(crate) fn with_index<R>(
         shared.per_point = block.per_point;
         shared.points.clear();
         shared.values.clear();
+        shared.reach.clear();
         for (row, &first) in block.points.iter().enumerate() {
             for &i in distinct.members(first) {
                 shared.points.push(i);
                 shared.values.extend_from_slice(block.row(row));
+                shared.reach.push(block.reach[row]);
             }
         }
         f(&shared);
@@ -254,6 +270,7 @@ fn extract_indexed(
     index.for_each_chunk(config.largest_scale(), chunk_points, |chunk| {
         block.points.clear();
         block.points.extend_from_slice(chunk.queries());
+        radii(points, chunk, &mut block.reach);
         match probabilities {
             Some(probabilities) => {
                 plain_features(points, chunk, config, &mut plain);
@@ -271,6 +288,22 @@ fn extract_indexed(
         f(&block);
     })?;
     Ok(())
+}
+
+/// The distance of every row's last (`k0`-th) neighbour from its query into `out`
+/// (resized): the rows' [reach](FeatureBlock::reach) of features.
+pub(crate) fn radii(points: &[[f32; 3]], chunk: &NeighbourChunk, out: &mut Vec<f32>) {
+    out.resize(chunk.len(), 0.0);
+    (out.par_iter_mut())
+        .zip(chunk.queries().par_iter())
+        .zip(chunk.rows().par_chunks(chunk.k()))
+        .for_each(|((out, &q), row)| {
+            let (p, last) = (points[q as usize], points[row[row.len() - 1] as usize]);
+            let d2: f64 = (0..3)
+                .map(|a| (f64::from(p[a]) - f64::from(last[a])).powi(2))
+                .sum();
+            *out = d2.sqrt() as f32;
+        });
 }
 
 /// The features of every row of `chunk` into `out` (resized), in parallel.

@@ -20,7 +20,7 @@ use std::collections::VecDeque;
 use bounded_geom::{KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
-use crate::extract::{in_context, plain_features, values_per_point, with_index};
+use crate::extract::{in_context, plain_features, radii, values_per_point, with_index};
 use crate::{FeatureBlock, FeatureConfig, FeatureError};
 
 /// Chunks that may wait for their second stage at once: each holds its `chunk x k0` neighbour
@@ -81,6 +81,7 @@ fn staged(
     }
     let mut stage = FirstStage {
         probabilities: vec![[0.0; 3]; cloud.len()],
+        radius: vec![0.0; cloud.len()],
         classified: vec![false; cloud.len()],
         block: Vec::new(),
         first,
@@ -100,6 +101,17 @@ fn staged(
             &stage.probabilities,
             &mut output.values,
         );
+        // The context reads the first stage of every neighbour, which read its own
+        // neighbours: the point's reach plus the largest of theirs.
+        let radius = &stage.radius;
+        output.reach.resize(p.chunk.len(), 0.0);
+        (output.reach.par_iter_mut())
+            .zip(p.features.reach.par_iter())
+            .zip(p.chunk.rows().par_chunks(p.chunk.k()))
+            .for_each(|((out, &own), row)| {
+                let widest = row.iter().map(|&q| radius[q as usize]).fold(0.0, f32::max);
+                *out = own + widest;
+            });
         second(&output);
         p
     };
@@ -169,6 +181,8 @@ fn staged(
 struct FirstStage<'a> {
     /// Per cloud index; valid where `classified`.
     probabilities: Vec<[f32; 3]>,
+    /// The reach of the features, per cloud index; valid where `classified`.
+    radius: Vec<f32>,
     classified: Vec<bool>,
     /// One block's probabilities.
     block: Vec<[f32; 3]>,
@@ -188,11 +202,13 @@ impl FirstStage<'_> {
         features.points.clear();
         features.points.extend_from_slice(chunk.queries());
         plain_features(points, chunk, config, &mut features.values);
+        radii(points, chunk, &mut features.reach);
         self.block.clear();
         self.block.resize(chunk.len(), [0.0; 3]);
         (self.first)(features, &mut self.block);
-        for (&i, p) in chunk.queries().iter().zip(&self.block) {
+        for ((&i, p), &r) in chunk.queries().iter().zip(&self.block).zip(&features.reach) {
             self.probabilities[i as usize] = *p;
+            self.radius[i as usize] = r;
             self.classified[i as usize] = true;
         }
     }

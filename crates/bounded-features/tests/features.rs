@@ -523,3 +523,48 @@ fn staged_equals_two_passes_whatever_the_chunking_and_thread_count() {
         }
     }
 }
+
+#[test]
+fn reach_is_the_farthest_neighbour_and_for_the_context_its_neighbours_too() {
+    // Ten points on a line, x = 0, 1, 2, 3, 5, ... (a gap of 2 after x = 3), a repeat of
+    // x = 0 at the end; 3 neighbours (the point, then the two nearest).
+    let xs = [0.0, 1.0, 2.0, 3.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 0.0];
+    let points: Vec<[f64; 3]> = xs.iter().map(|&x| [x, 0.0, 0.0]).collect();
+    let cloud = PointCloud::from_local(
+        [0.0; 3],
+        points.iter().map(|p| p.map(|c| c as f32)).collect(),
+    )
+    .unwrap();
+    let cfg = config(&[3]);
+    // Features: the distance of the third neighbour. x = 0: 2; x = 1, 2: 1; x = 3: 2 (2, 1);
+    // x = 5: 2 (6, 7 or 3); x = 6..9: 1; x = 10: 2; the repeat shares x = 0's.
+    let own = [2.0, 1.0, 1.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0];
+    let mut reach = vec![f32::NAN; xs.len()];
+    extract_chunks(&cloud, &cfg, 4, |block| {
+        for (&i, &r) in block.points().iter().zip(block.reach()) {
+            reach[i as usize] = r;
+        }
+    })
+    .unwrap();
+    assert_eq!(reach, own);
+    // The context reads the neighbours' first stage: the point's reach plus the largest of
+    // its neighbours' (its own among them). x = 0 (neighbours 1, 2): 2 + 2; x = 2 (1, 3):
+    // 1 + 2; x = 6 (5, 7): 1 + 2; x = 8 (7, 9): 1 + 1; x = 10 (9, 8): 2 + 2.
+    let mut staged = vec![f32::NAN; xs.len()];
+    extract_chunks_staged(
+        &cloud,
+        &cfg,
+        4,
+        |_, out| out.fill([1.0, 0.0, 0.0]),
+        |block| {
+            for (&i, &r) in block.points().iter().zip(block.reach()) {
+                staged[i as usize] = r;
+            }
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        staged,
+        [4.0, 3.0, 3.0, 4.0, 4.0, 3.0, 2.0, 2.0, 3.0, 4.0, 4.0]
+    );
+}

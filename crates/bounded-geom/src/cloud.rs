@@ -68,26 +68,40 @@ impl Frame {
             std::array::from_fn(|a| lo[a].min(hi[a])),
             std::array::from_fn(|a| lo[a].max(hi[a])),
         );
-        let origin = match bulk(lo, hi, len, &position) {
-            Some((inner_lo, inner_hi)) => {
-                let (lo, hi) = (0..len)
-                    .into_par_iter()
-                    .map(&position)
-                    .filter(|p| (0..3).all(|a| (inner_lo[a]..=inner_hi[a]).contains(&p[a])))
-                    .map(|p| (p, p))
-                    .reduce(
-                        || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-                        |(l0, h0), (l1, h1)| {
-                            (
-                                std::array::from_fn(|a| l0[a].min(l1[a])),
-                                std::array::from_fn(|a| h0[a].max(h1[a])),
-                            )
-                        },
-                    );
-                centre(lo, hi)
-            }
-            None => centre(lo, hi),
+        let Some((inner_lo, inner_hi)) = bulk(lo, hi, len, &position) else {
+            return Self::of_bounds(lo, hi);
         };
+        let (bulk_lo, bulk_hi) = (0..len)
+            .into_par_iter()
+            .map(&position)
+            .filter(|p| (0..3).all(|a| (inner_lo[a]..=inner_hi[a]).contains(&p[a])))
+            .map(|p| (p, p))
+            .reduce(
+                || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+                |(l0, h0), (l1, h1)| {
+                    (
+                        std::array::from_fn(|a| l0[a].min(l1[a])),
+                        std::array::from_fn(|a| h0[a].max(h1[a])),
+                    )
+                },
+            );
+        Self::centred(centre(bulk_lo, bulk_hi), lo, hi)
+    }
+
+    /// The frame [`Frame::of`] gives positions with the bounding box `lo`..`hi` (either way
+    /// round per axis) and no far outliers, from the box alone: the box's centre and the
+    /// scale of its extent. Parts of a cloud (the tiles of a survey) built in the frame of
+    /// the whole cloud's box get the offsets the whole cloud has.
+    pub fn of_bounds(lo: [f64; 3], hi: [f64; 3]) -> Self {
+        let (lo, hi) = (
+            std::array::from_fn(|a| lo[a].min(hi[a])),
+            std::array::from_fn(|a| lo[a].max(hi[a])),
+        );
+        Self::centred(centre(lo, hi), lo, hi)
+    }
+
+    /// The frame at `origin` of positions within `lo`..`hi` (ordered).
+    fn centred(origin: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> Self {
         // Half the largest distance from the origin along an axis (halves cannot overflow).
         let half_reach = (0..3)
             .map(|a| (0.5 * hi[a] - 0.5 * origin[a]).max(0.5 * origin[a] - 0.5 * lo[a]))
@@ -375,6 +389,8 @@ mod tests {
                 [0, 1, 2].map(|a| (p[a] - cloud.origin()[a]) as f32)
             );
         }
+        // The frame of the box alone is the same.
+        assert_eq!(Frame::of_bounds(hi, lo), cloud.frame());
         // Clouds near the edges of the safe range of the largest offset too (about half
         // the extent here).
         for s in [2f64.powi(-28), 2f64.powi(30)] {
@@ -391,6 +407,13 @@ mod tests {
             let scaled: Vec<_> = points.iter().map(|p| p.map(|c| c * s)).collect();
             let cloud = PointCloud::from_f64(&scaled).unwrap();
             assert_eq!(cloud.scale(), expected, "{s}");
+            let corner = |f: fn(f64, f64) -> f64| {
+                std::array::from_fn(|a| scaled.iter().map(|p| p[a]).fold(scaled[0][a], f))
+            };
+            assert_eq!(
+                Frame::of_bounds(corner(f64::min), corner(f64::max)),
+                cloud.frame()
+            );
             let magnitude = (cloud.points().iter().flatten()).fold(0f32, |m, c| m.max(c.abs()));
             assert!((1.0..4.0).contains(&magnitude), "{s}: {magnitude}");
             for (i, p) in scaled.iter().enumerate() {

@@ -210,6 +210,20 @@ impl Detector {
         cloud: &PointCloud,
         mut f: impl FnMut(&[u32], &[[f32; N_CLASSES]]),
     ) -> Result<Work, NnError> {
+        self.detect_blocks_with_reach(cloud, |points, probabilities, _| f(points, probabilities))
+    }
+
+    /// [`detect_blocks`](Self::detect_blocks), handing `f` each point's reach too: every
+    /// position its result was computed from lies within that distance of it, in the
+    /// cloud's offsets (see `bounded_features::FeatureBlock::reach`; for a two-stage model,
+    /// the second stage's). A point of a part of a larger cloud has the result it has in the
+    /// whole cloud when the part holds every point of the whole within its reach (and the
+    /// part keeps the whole's positions and point order).
+    pub fn detect_blocks_with_reach(
+        &self,
+        cloud: &PointCloud,
+        mut f: impl FnMut(&[u32], &[[f32; N_CLASSES]], &[f32]),
+    ) -> Result<Work, NnError> {
         let k0 = self.config.largest_scale();
         if cloud.len() < k0 {
             return Err(NnError::TooFewPoints {
@@ -236,7 +250,7 @@ impl Detector {
             None => extract_chunks(cloud, &self.config, DEFAULT_CHUNK_POINTS, |block| {
                 out.resize(block.len(), [0.0; N_CLASSES]);
                 classify(&self.classifier, block, &mut out);
-                f(block.points(), &out);
+                f(block.points(), &out, block.reach());
             })
             .map(|()| 0)?,
             Some(second) => {
@@ -252,7 +266,7 @@ impl Detector {
                     |block| {
                         out.resize(block.len(), [0.0; N_CLASSES]);
                         (classify.borrow_mut())(second, block, &mut out);
-                        f(block.points(), &out);
+                        f(block.points(), &out, block.reach());
                     },
                 )?
             }

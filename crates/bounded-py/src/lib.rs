@@ -3,14 +3,17 @@
 //! A thin layer: it converts numpy arrays to the library's types and back, maps the library's
 //! errors to Python exceptions, and releases the GIL while the library works; detection,
 //! features and formats are the library crates' (`bounded-nn`, `bounded-features`,
-//! `bounded-data`). Built and installed with maturin (`pip install crates/bounded-py`); the
-//! Python API is documented in `bounded.pyi` and README.md beside this crate.
+//! `bounded-data`, `bounded-survey`). Built and installed with maturin (`pip install
+//! crates/bounded-py`) as the extension `bounded._bounded`, which the package `bounded`
+//! (python/bounded) re-exports beside its pure-Python `bounded.distributed`; the Python API
+//! is documented in python/bounded/__init__.pyi and README.md beside this crate.
 
 mod convert;
 mod errors;
 mod files;
 mod model;
 mod progress;
+mod survey;
 
 use bounded_features::{DEFAULT_SCALES, FeatureConfig, FeatureGroups, extract};
 use bounded_geom::Class;
@@ -166,7 +169,7 @@ fn feature_names(groups: Option<Vec<String>>) -> PyResult<Vec<&'static str>> {
 
 /// BoundED: sharp edges and boundaries in 3D point clouds, from the point positions alone.
 #[pymodule]
-#[pyo3(name = "bounded")]
+#[pyo3(name = "_bounded")]
 fn bounded_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("NON_EDGE", Class::NonEdge as u8)?;
@@ -183,5 +186,7 @@ fn bounded_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(feature_names, m)?)?;
     m.add_function(wrap_pyfunction!(files::read, m)?)?;
     m.add_function(wrap_pyfunction!(files::write, m)?)?;
+    m.add_function(wrap_pyfunction!(survey::plan_survey, m)?)?;
+    m.add_function(wrap_pyfunction!(survey::detect_tile, m)?)?;
     Ok(())
 }

@@ -1,5 +1,6 @@
-//! `bounded detect`: label every point of a cloud file, or of several files as one cloud
-//! (or each on its own with `--separate`).
+//! `bounded detect`: label every point of a cloud file, or of several files as one survey
+//! (tile by tile, each with the halo that makes its labels the whole survey's; or each on its
+//! own with `--separate`).
 
 use super::{grouped, peak_memory, rate};
 use crate::cli::DetectArgs;
@@ -9,41 +10,43 @@ use anyhow::{Context, Result, bail};
 use bounded_data::DataError;
 use bounded_data::annotate::AnnotateOptions;
 use bounded_data::format::{self, Format};
-use bounded_data::table::PointTable;
-use bounded_geom::{GeomError, PointCloud};
-use bounded_nn::{Detection, Detector};
+use bounded_geom::GeomError;
+use bounded_nn::Detector;
+use bounded_survey::{Event, Options, Plan, ReadOptions, SurveyError, TileReport};
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on unknown formats and unusable outputs before any work is done.
-    let (outputs, into_directory) = output_paths(args)?;
+    let outputs = output_paths(args)?;
     let detector = pipeline::detector(&args.model)?;
-
-    // The inputs labelled together: all of them (tiles of one cloud), or each on its own.
-    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
-    let written_to: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
-    let group = if args.separate { 1 } else { inputs.len() };
-    let (mut n, mut counts, mut detecting) = (0, [0; 3], Duration::ZERO);
-    for (group_inputs, group_outputs) in inputs.chunks(group).zip(written_to.chunks(group)) {
-        let detection = label(
-            group_inputs,
-            group_outputs,
-            into_directory.then_some(&*args.output),
-            args,
-            &detector,
-        )?;
-        n += detection.classes.len();
-        for (total, count) in counts.iter_mut().zip(detection.class_counts()) {
-            *total += count;
+    let read = ReadOptions {
+        drop_non_finite: args.drop_non_finite,
+    };
+    let options = Options {
+        read,
+        annotate: AnnotateOptions {
+            class_to: args.class_to,
+            colours: args.colours,
+            flavour: args.flavour,
+        },
+        ..Options::default()
+    };
+    // The inputs labelled together: all of them (the tiles of a survey), or each on its own.
+    let group = if args.separate { 1 } else { args.inputs.len() };
+    let mut reports = Vec::new();
+    let stream = [&args.inputs[0], &args.output].contains(&&PathBuf::from("-"));
+    for (inputs, outputs) in args.inputs.chunks(group).zip(outputs.chunks(group)) {
+        if stream {
+            reports.push(label_stream(args, &detector, &options)?);
+            continue;
         }
-        detecting += detection.elapsed;
+        let plan = Plan::of(inputs, read).map_err(hint)?;
+        reports.extend(label(&plan, &detector, outputs, &options)?);
     }
-
     // A run killed outright (SIGKILL) leaves its temporary file behind: name those found.
-    let files: Vec<&Path> = written_to
-        .into_iter()
+    let files: Vec<&Path> = (outputs.iter().map(PathBuf::as_path))
         .filter(|o| *o != Path::new("-"))
         .collect();
     for stale in bounded_geom::atomic::stale_temporaries_beside(&files) {
@@ -53,7 +56,15 @@ pub fn run(args: &DetectArgs) -> Result<()> {
             stale.display()
         );
     }
-    let [non_edge, sharp, boundary] = counts;
+
+    let n: usize = reports.iter().map(|r| r.points).sum();
+    let count = |c: usize| grouped(reports.iter().map(|r| r.class_counts[c]).sum());
+    let detecting: f64 = reports.iter().map(|r| r.detection.as_secs_f64()).sum();
+    let labelled: usize = reports.iter().map(|r| r.labelled).sum();
+    let halo = match labelled > n {
+        true => format!(" (with halos: {} points labelled)", grouped(labelled)),
+        false => String::new(),
+    };
     let seconds = start.elapsed().as_secs_f64();
     let memory = peak_memory().map_or(String::new(), |m| format!(", peak memory {m}"));
     let wrote = match outputs.as_slice() {
@@ -61,128 +72,112 @@ pub fn run(args: &DetectArgs) -> Result<()> {
         all => format!("{} files to {}", all.len(), args.output.display()),
     };
     eprintln!(
-        "{} points: {} sharp edge, {} boundary, {} non-edge; detection {:.2} s ({}), \
+        "{} points: {} sharp edge, {} boundary, {} non-edge; detection {detecting:.2} s ({}){halo}, \
          total {seconds:.2} s{memory}; wrote {wrote}",
         grouped(n),
-        grouped(sharp),
-        grouped(boundary),
-        grouped(non_edge),
-        detecting.as_secs_f64(),
-        rate(n, detecting.as_secs_f64()),
+        count(1),
+        count(2),
+        count(0),
+        rate(labelled, detecting),
     );
     Ok(())
 }
 
-/// Reads `inputs`, labels them as one cloud and writes each one's result to its output
-/// (creating `directory` first, if given, so a failed run leaves none behind).
-fn label(
-    inputs: &[&Path],
-    outputs: &[&Path],
-    directory: Option<&Path>,
-    args: &DetectArgs,
-    detector: &Detector,
-) -> Result<Detection> {
-    let mut tables = Vec::with_capacity(inputs.len());
-    for input in inputs {
-        let mut table = read(input, args.drop_non_finite)?;
-        // The output replaces them: free their memory while the cloud is labelled.
-        format::drop_annotated(&mut table);
-        tables.push(table);
+/// Labels one cloud read from standard input or written to standard output (`-`), whole.
+fn label_stream(args: &DetectArgs, detector: &Detector, options: &Options) -> Result<TileReport> {
+    let (input, output) = (&args.inputs[0], &args.output);
+    let start = Instant::now();
+    let (mut table, dropped) = match input == Path::new("-") {
+        true => format::read_stream(std::io::stdin().lock(), None, args.drop_non_finite, input)
+            .map(|(t, _, n)| (t, n))
+            .map_err(SurveyError::from),
+        false => options.read.read(input),
     }
-    let detection = match tables.as_slice() {
-        [table] => pipeline::detect(detector, &table.cloud, true),
-        _ => {
-            let clouds: Vec<&PointCloud> = tables.iter().map(|t| &t.cloud).collect();
-            pipeline::detect(detector, &PointCloud::concat(&clouds)?, true)
+    .map_err(hint)?;
+    format::drop_annotated(&mut table);
+    let d = pipeline::detect(detector, &table.cloud, true).context(input.display().to_string())?;
+    let (classes, probabilities) = (&d.classes, &d.probabilities);
+    match stdout_format(args, output)? {
+        Some(f) => {
+            let stdout = std::io::stdout().lock();
+            format::write_annotated_to(
+                stdout,
+                f,
+                output,
+                &table,
+                classes,
+                probabilities,
+                &options.annotate,
+            )
         }
-    }
-    .with_context(|| {
-        let names: Vec<_> = inputs.iter().map(|p| p.display().to_string()).collect();
-        names.join(", ")
-    })?;
-
-    if let Some(directory) = directory {
-        std::fs::create_dir_all(directory)
-            .with_context(|| format!("cannot create {}", directory.display()))?;
-    }
-    let writing = progress::spinner("write");
-    // Each table's results are the next `len` of the joined run. A failure names the outputs
-    // already written: they are complete and stay.
-    let mut first = 0;
-    for (k, (table, output)) in tables.iter().zip(outputs).enumerate() {
-        let range = first..first + table.len();
-        let classes = &detection.classes[range.clone()];
-        let probabilities = &detection.probabilities[range.clone()];
-        let options = AnnotateOptions {
-            class_to: args.class_to,
-            colours: args.colours,
-            flavour: args.flavour,
-        };
-        let written = match stdout_format(args, output)? {
-            Some(f) => {
-                let stdout = std::io::stdout().lock();
-                format::write_annotated_to(
-                    stdout,
-                    f,
-                    output,
-                    table,
-                    classes,
-                    probabilities,
-                    &options,
-                )
-            }
-            None => format::write_annotated_with(output, table, classes, probabilities, &options),
-        };
-        if let Err(e) = written {
-            writing.finish_and_clear();
-            let done: Vec<_> = outputs[..k]
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect();
-            return Err(match done.as_slice() {
-                [] => e.into(),
-                done => anyhow::Error::from(e).context(format!(
-                    "{} of {} outputs were written before this failure and stay complete: {}",
-                    done.len(),
-                    outputs.len(),
-                    done.join(", ")
-                )),
-            });
+        None => {
+            format::write_annotated_with(output, &table, classes, probabilities, &options.annotate)
         }
-        first = range.end;
-    }
-    writing.finish_and_clear();
-    Ok(detection)
+    }?;
+    let elapsed = start.elapsed();
+    Ok(TileReport::whole(output, table.len(), dropped, &d, elapsed))
 }
 
-/// Reads `input` with every property; with `drop_non_finite`, leaves out (and reports) the
-/// points with a non-finite coordinate.
-fn read(input: &Path, drop_non_finite: bool) -> Result<PointTable> {
-    let reading = progress::spinner("read");
-    let read = if input == Path::new("-") {
-        let stdin = std::io::stdin().lock();
-        format::read_stream(stdin, None, drop_non_finite, input).map(|(t, _, n)| (t, n))
-    } else if drop_non_finite {
-        format::read_finite(input)
-    } else {
-        format::read(input).map(|table| (table, 0))
-    };
-    reading.finish_and_clear();
-    let (table, dropped) = read.map_err(|e| match e {
-        DataError::Geom {
-            source: GeomError::NonFinite { .. },
-            ..
-        } => anyhow::anyhow!("{e} (--drop-non-finite leaves such points out)"),
-        e => e.into(),
-    })?;
-    if dropped > 0 {
-        let points = if dropped == 1 { "point" } else { "points" };
+/// Labels the tiles of `plan` into `outputs`, with a progress bar per tile.
+fn label(
+    plan: &Plan,
+    detector: &Detector,
+    outputs: &[PathBuf],
+    options: &Options,
+) -> Result<Vec<TileReport>> {
+    let tiles = plan.inputs().len();
+    let mut bar = None;
+    let reports =
+        bounded_survey::detect_survey(plan, detector, outputs, options, &mut |event| match event {
+            Event::Loaded {
+                tile, points, halo, ..
+            } => {
+                let step = match tiles {
+                    1 => "detect".to_string(),
+                    _ => format!("tile {}/{tiles}", tile + 1),
+                };
+                bar = Some(progress::bar(&step, (points + halo) as u64, "points"));
+            }
+            Event::Detecting { done, .. } => bar.iter().for_each(|b| b.set_position(done as u64)),
+            Event::Growing { .. } | Event::Written { .. } => {
+                bar.take().iter().for_each(|b| b.finish_and_clear())
+            }
+        });
+    bar.iter().for_each(|b| b.finish_and_clear());
+    let reports = reports.map_err(hint)?;
+    for (input, r) in plan
+        .inputs()
+        .iter()
+        .zip(&reports)
+        .filter(|(_, r)| r.dropped > 0)
+    {
+        let points = if r.dropped == 1 { "point" } else { "points" };
         eprintln!(
-            "{}: left out {dropped} {points} with a NaN or infinite coordinate",
-            input.display()
+            "{}: left out {} {points} with a NaN or infinite coordinate",
+            input.path.display(),
+            r.dropped
         );
     }
-    Ok(table)
+    Ok(reports)
+}
+
+/// `e`, with the option that avoids it where there is one.
+fn hint(e: SurveyError) -> anyhow::Error {
+    let non_finite = |e: &SurveyError| {
+        matches!(
+            e,
+            SurveyError::Data(DataError::Geom {
+                source: GeomError::NonFinite { .. },
+                ..
+            })
+        )
+    };
+    match &e {
+        SurveyError::Stopped { source, .. } if non_finite(source) => {}
+        e if non_finite(e) => {}
+        _ => return e.into(),
+    }
+    anyhow::anyhow!("{e} (--drop-non-finite leaves such points out)")
 }
 
 /// Where each input's result goes, and whether into a directory: `--output` for one input,
@@ -191,7 +186,7 @@ fn read(input: &Path, drop_non_finite: bool) -> Result<PointTable> {
 /// leaves nothing behind. Checked before any work: known formats, an existing parent (for a
 /// directory, its nearest existing ancestor is a directory), no two inputs to one file, no
 /// input replaced by another's result.
-fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
+fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
     let output = &args.output;
     if output == Path::new("-") {
         if args.inputs.len() != 1 {
@@ -201,7 +196,7 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
             );
         }
         stdout_format(args, output)?;
-        return Ok((vec![output.clone()], false));
+        return Ok(vec![output.clone()]);
     }
     let names_directory =
         output.is_dir() || (output.to_str()).is_some_and(|s| s.ends_with(std::path::is_separator));
@@ -222,7 +217,7 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
         }
         refuse_replacing_input(&args.inputs[0], output)?;
         bounded_geom::atomic::probe(output)?;
-        return Ok((vec![output.clone()], false));
+        return Ok(vec![output.clone()]);
     }
     if output.exists() && !output.is_dir() {
         bail!(
@@ -262,7 +257,7 @@ fn output_paths(args: &DetectArgs) -> Result<(Vec<PathBuf>, bool)> {
         Some(directory) => writable(directory)?,
         None => writable(Path::new("."))?,
     }
-    Ok((outputs, true))
+    Ok(outputs)
 }
 
 /// The format of `output` when it is `-` (standard output): `--format`, else the input's.

@@ -65,6 +65,29 @@ pub const CODE_SHARP: u8 = 64;
 /// LAS Classification code of BoundED's boundary class (user-definable range).
 pub const CODE_BOUNDARY: u8 = 65;
 
+/// The coordinate bounds a LAS or LAZ file's header declares, corner `lo` to `hi`, and its
+/// point count (LAS 1.4: the 64-bit one, as the reader takes it), read without any point:
+/// what a planner of tiles needs from each file of a survey. The bounds are only as right
+/// as the file's writer made them; a reader of the points can check them.
+pub fn header_bounds(path: &Path) -> Result<([f64; 3], [f64; 3], u64), DataError> {
+    let file = std::fs::File::open(path).map_err(|e| DataError::io(path, e))?;
+    let raw = las::raw::Header::read_from(std::io::BufReader::new(file))
+        .map_err(|e| las_error(path, e))?;
+    let lo = [raw.min_x, raw.min_y, raw.min_z];
+    let hi = [raw.max_x, raw.max_y, raw.max_z];
+    let count = match raw.large_file {
+        Some(large) if large.number_of_point_records != 0 => large.number_of_point_records,
+        _ => u64::from(raw.number_of_point_records),
+    };
+    if count > 0 && !(0..3).all(|a| lo[a].is_finite() && hi[a].is_finite() && lo[a] <= hi[a]) {
+        return Err(DataError::malformed(
+            path,
+            format!("LAS: the header's bounds {lo:?} to {hi:?} are not a box"),
+        ));
+    }
+    Ok((lo, hi, count))
+}
+
 fn las_error(path: &Path, e: las::Error) -> DataError {
     match e {
         las::Error::Io(e) if e.kind() != std::io::ErrorKind::UnexpectedEof => {

@@ -949,3 +949,20 @@ fn float_clouds_finer_than_a_las_grid_keep_what_it_holds() {
     }
     assert!(exact > 0 && moved > 0, "{exact} {moved}");
 }
+
+#[test]
+fn header_bounds_are_the_points_box_without_reading_them() {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["las", "laz"] {
+        let path = dir.path().join(format!("t.{ext}"));
+        crate::format::write(&path, &sample()).unwrap();
+        let (lo, hi, count) = super::header_bounds(&path).unwrap();
+        assert_eq!(count, 3, "{ext}");
+        assert_eq!(lo, [500_000.125, 5_403_150.5, 12.25], "{ext}");
+        assert_eq!(hi, [500_010.0, 5_403_160.0, 13.0], "{ext}");
+    }
+    let short = dir.path().join("short.las");
+    std::fs::write(&short, b"LASF").unwrap();
+    let e = super::header_bounds(&short).unwrap_err().to_string();
+    assert!(e.starts_with(&format!("{}: LAS", short.display())), "{e}");
+}

@@ -1,6 +1,7 @@
 """BoundED: sharp edges and boundaries in 3D point clouds, from the point positions alone.
 
-Type stubs of the native module; the docstrings of the module itself say the same at run time.
+Type stubs of the package (the native module ``bounded._bounded``, re-exported); the
+docstrings of the module itself say the same at run time. ``bounded.distributed`` is Python.
 """
 
 import os
@@ -125,3 +126,29 @@ def write(path: _Path, xyz: _Positions, /, **fields: npt.ArrayLike) -> None:
     """Writes ``xyz`` and the per-point ``fields`` (1-D arrays of n values: uint8, int8,
     uint16, int16, uint32, int32, float32, float64 or bool) to ``path``, in the format its
     extension names; atomically (a failure leaves no file)."""
+
+_PlannedInput = tuple[str, tuple[float, float, float], tuple[float, float, float], int]
+
+def plan_survey(inputs: Sequence[_Path], *, drop_non_finite: bool = False) -> list[_PlannedInput]:
+    """Plans the survey of the files ``inputs``: one tile each, in this order, with the bounds
+    of its points (a LAS or LAZ header's, or one read of any other format). Returns
+    ``(path, lower corner, upper corner, points)`` per input, plain data that
+    ``detect_tile`` takes back in any process."""
+
+def detect_tile(
+    plan: Sequence[_PlannedInput],
+    tile: int,
+    output: _Path,
+    *,
+    model: _Path | None = None,
+    scales: Sequence[int] | None = None,
+    sensitivity: float | None = None,
+    fast: bool = False,
+    drop_non_finite: bool = False,
+    radius: float | None = None,
+    threads: int | None = None,
+) -> dict[str, float]:
+    """Labels tile ``tile`` of ``plan`` with the halo that makes its labels those of the whole
+    survey labelled as one cloud, and writes it to ``output`` (atomically: a retried task
+    rewrites the same file). Returns ``points``, ``halo``, ``labelled``, ``radius``,
+    ``attempts``, ``detection_seconds`` and ``seconds``. The GIL is released while it works."""
