@@ -96,7 +96,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     std::fs::create_dir_all(&dir)?;
     let side = (n as f64 / 10.0).sqrt();
-    let points = scene(n, side, 1);
+    // On the centimetre grid already: every file then stores the same integers for a point.
+    let points: Vec<[f64; 3]> = (scene(n, side, 1).into_iter())
+        .map(|p| p.map(|c| (c * 100.0).round() / 100.0))
+        .collect();
     let cell = |c: f64| ((c / side * grid as f64) as usize).min(grid - 1);
     let mut tiles = vec![Vec::new(); grid * grid];
     for p in &points {

@@ -160,8 +160,7 @@ pub fn detect_survey(
 /// if missing.
 ///
 /// The tile is labelled with its halo at the first radius ([`Options::radius`], or a guess
-/// from its points: twice, for a two-stage model, 1.25 times the 90th percentile of the
-/// `k0`-th neighbour distances of a sample) and every point's result proven to be the
+/// from the reach of a sample of its points) and every point's result proven to be the
 /// survey's (see [`crate::proof`]); where a proof fails, the radius at least doubles and the
 /// tile is labelled again. The labels are those of the whole survey labelled as one cloud in
 /// the plan's frame, bit for bit, whatever the radius.
@@ -289,17 +288,13 @@ pub fn detect_tile(
 /// Points sampled for the first radius.
 const SAMPLE: usize = 1024;
 
-/// A first halo radius for `cloud` (absolute units): per stage of `detector`, 1.25 times the
-/// 90th percentile of the `k0`-th neighbour distances of a sample of its distinct positions
-/// (spread along the Morton order). A reach is about one such distance per stage, so the
-/// points next to the tile's sides mostly fit at once.
+/// A first halo radius for `cloud` (absolute units): 1.5 times the largest reach (see
+/// [`crate::proof`]) of a sample of its distinct positions (spread along the Morton order),
+/// computed within the tile: the `k0`-th neighbour distance, plus for a two-stage model the
+/// largest such distance among the neighbours. A retry labels the whole tile again, costing
+/// far more than a wider halo: the sample's largest reach, not a typical one.
 fn first_radius(detector: &Detector, cloud: &PointCloud) -> f64 {
     let k0 = detector.feature_config().largest_scale();
-    let stages = if detector.classifier().second_stage().is_some() {
-        2.0
-    } else {
-        1.0
-    };
     let index = match Distinct::of(cloud) {
         Some(distinct) => KnnIndex::of_subset(cloud, distinct.firsts()),
         None => KnnIndex::new(cloud),
@@ -309,26 +304,43 @@ fn first_radius(detector: &Detector, cloud: &PointCloud) -> f64 {
     let Ok(search) = index.search(k0) else {
         return 0.0;
     };
-    let len = index.len();
-    let mut chunk = NeighbourChunk::default();
-    search.positions((0..len).step_by(len.div_ceil(SAMPLE).max(1)), &mut chunk);
     let points = cloud.points();
-    let mut distances: Vec<f64> = (0..chunk.len())
-        .map(|row| {
-            let (p, q) = (
-                points[chunk.queries()[row] as usize],
-                points[chunk.row(row)[k0 - 1] as usize],
-            );
-            (0..3)
-                .map(|a| (f64::from(p[a]) - f64::from(q[a])).powi(2))
-                .sum::<f64>()
-                .sqrt()
-        })
-        .collect();
-    distances.sort_unstable_by(f64::total_cmp);
-    let p90 = distances
-        .get(distances.len() * 9 / 10)
-        .copied()
-        .unwrap_or(0.0);
-    1.25 * stages * p90 * cloud.scale()
+    // The k0-th neighbour distance of the index's points at Morton `positions`, by cloud index.
+    let mut chunk = NeighbourChunk::default();
+    let mut radii = |positions: &mut dyn Iterator<Item = usize>| {
+        search.positions(positions, &mut chunk);
+        (0..chunk.len())
+            .map(|row| {
+                let (i, last) = (chunk.queries()[row], chunk.row(row)[k0 - 1]);
+                let (p, q) = (points[i as usize], points[last as usize]);
+                let d2: f64 = (0..3)
+                    .map(|a| (f64::from(p[a]) - f64::from(q[a])).powi(2))
+                    .sum();
+                (i, d2.sqrt(), chunk.row(row).to_vec())
+            })
+            .collect::<Vec<_>>()
+    };
+    let len = index.len();
+    let sample = radii(&mut (0..len).step_by(len.div_ceil(SAMPLE).max(1)));
+    let largest = if detector.classifier().second_stage().is_none() {
+        sample.iter().map(|s| s.1).fold(0.0, f64::max)
+    } else {
+        let mut position = vec![0u32; points.len()];
+        for (pos, &i) in index.order().iter().enumerate() {
+            position[i as usize] = pos as u32;
+        }
+        let mut neighbours: Vec<usize> = (sample.iter())
+            .flat_map(|s| s.2.iter().map(|&q| position[q as usize] as usize))
+            .collect();
+        neighbours.sort_unstable();
+        neighbours.dedup();
+        let mut own = vec![0.0; points.len()];
+        for (i, d, _) in radii(&mut neighbours.into_iter()) {
+            own[i as usize] = d;
+        }
+        (sample.iter())
+            .map(|(_, d, row)| d + row.iter().map(|&q| own[q as usize]).fold(0.0, f64::max))
+            .fold(0.0, f64::max)
+    };
+    1.5 * largest * cloud.scale()
 }
