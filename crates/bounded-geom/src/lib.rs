@@ -64,6 +64,7 @@ mod network;
 mod rotation;
 mod select;
 mod smallest;
+mod stream;
 pub mod vec3;
 
 pub use class::Class;
@@ -75,6 +76,7 @@ pub use knn::{KnnIndex, KnnSearch, NeighbourChunk};
 pub use morton::morton_order;
 pub use rotation::rotation_of_quaternion;
 pub use smallest::SmallestFirst;
+pub use stream::uniform_stream;
 pub use vec3::{cross, dot};
 
 /// A 64-bit linear congruential stream for the tests.

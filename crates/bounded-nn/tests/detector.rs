@@ -2,7 +2,7 @@
 //! cloud, the first network, the context of its probabilities, the second network.
 
 use bounded_features::{extract, extract_in_context};
-use bounded_geom::{Class, PointCloud};
+use bounded_geom::{Class, PointCloud, uniform_stream};
 use bounded_nn::{Classifier, Detector, N_CLASSES, argmax, default_model};
 use std::path::Path;
 
@@ -36,23 +36,11 @@ fn assert_identical(cloud: &PointCloud, what: &str) {
     }
 }
 
-/// SplitMix64 in [0, 1).
-fn rng(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 #[test]
 fn both_stages_in_one_pass_equal_two_passes_on_a_random_cube() {
     // Random points on a unit cube's faces, in random order: many chunks wait for later ones
     // across the octree's planes, so halos are computed.
-    let mut r = rng(5);
+    let mut r = uniform_stream(5);
     let positions: Vec<[f64; 3]> = (0..120_000)
         .map(|_| {
             let face = (r() * 6.0) as usize;
@@ -83,7 +71,7 @@ fn both_stages_in_one_pass_equal_two_passes_on_the_real_scans() {
 
 #[test]
 fn the_first_stage_alone_and_the_sensitivity() {
-    let mut r = rng(8);
+    let mut r = uniform_stream(8);
     let positions: Vec<[f64; 3]> = (0..3000)
         .map(|_| {
             let (u, v) = (r() * 40.0 - 20.0, r() * 40.0);

@@ -10,23 +10,11 @@ use std::path::{Path, PathBuf};
 
 use bounded_data::format;
 use bounded_data::table::{PointTable, PositionType};
-use bounded_geom::PointCloud;
-
-/// SplitMix64 in [0, 1).
-fn stream(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use bounded_geom::{PointCloud, uniform_stream};
 
 /// The building of the 50 m block at `(bx, by)`: its footprint corners and height.
 fn building(bx: i64, by: i64) -> ([f64; 2], [f64; 2], f64) {
-    let mut r = stream((bx as u64).wrapping_mul(7919) ^ (by as u64).wrapping_mul(104_729));
+    let mut r = uniform_stream((bx as u64).wrapping_mul(7919) ^ (by as u64).wrapping_mul(104_729));
     let (w, d, h) = (10.0 + 15.0 * r(), 10.0 + 15.0 * r(), 5.0 + 10.0 * r());
     let (x0, y0) = (
         bx as f64 * 50.0 + 5.0 + (35.0 - w) * r(),
@@ -41,7 +29,7 @@ fn ground(x: f64, y: f64) -> f64 {
 
 /// `n` points of the scene over the square of side `side` at the origin.
 fn scene(n: usize, side: f64, seed: u64) -> Vec<[f64; 3]> {
-    let mut r = stream(seed);
+    let mut r = uniform_stream(seed);
     let mut points = Vec::with_capacity(n);
     while points.len() < n {
         let (x, y) = (side * r(), side * r());

@@ -5,21 +5,9 @@ use std::path::{Path, PathBuf};
 
 use bounded_data::format;
 use bounded_data::table::PointTable;
-use bounded_geom::{KnnIndex, PointCloud};
+use bounded_geom::{KnnIndex, PointCloud, uniform_stream};
 use bounded_nn::{Detection, Detector};
 use bounded_survey::{Input, Options, Plan, ReadOptions, SurveyError, TileReport, detect_survey};
-
-/// SplitMix64 in [0, 1).
-fn stream(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// Survey extent (metres), its tiles per axis and side.
 const SIDE: f64 = 60.0;
@@ -29,7 +17,7 @@ const GRID: usize = 3;
 /// free-standing wall (boundaries), sampled at random, or on a grid of `step` metres
 /// (many equal neighbour distances) when `step` is given.
 fn scene(step: Option<f64>) -> Vec<[f64; 3]> {
-    let mut r = stream(5);
+    let mut r = uniform_stream(5);
     let mut points = Vec::new();
     let mut area =
         |n: usize, at: &mut dyn FnMut(f64, f64) -> [f64; 3], r: &mut dyn FnMut() -> f64| {
@@ -108,7 +96,7 @@ fn write_tiles(
     jitter: f64,
     ext: &str,
 ) -> (Vec<PathBuf>, Vec<[f64; 3]>) {
-    let mut r = stream(9);
+    let mut r = uniform_stream(9);
     let mut cells = vec![Vec::new(); GRID * GRID];
     for (i, &p) in points.iter().enumerate() {
         let c = cell(p, jitter, &mut r);
