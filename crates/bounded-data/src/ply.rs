@@ -386,8 +386,8 @@ pub fn write_to(
     view.check(path)?;
     // meshio's binary reader has no 16-bit signed type: such columns go out as int32, which
     // holds every value.
-    let widened: Vec<Property> = (view.properties.iter())
-        .filter_map(|p| match &p.values {
+    let widened: Vec<Option<Property>> = (view.properties.iter())
+        .map(|p| match &p.values {
             Column::I16(v) => Some(Property::new(
                 p.name.clone(),
                 Column::I32(v.iter().map(|&x| i32::from(x)).collect()),
@@ -395,11 +395,10 @@ pub fn write_to(
             _ => None,
         })
         .collect();
-    let mut wide = widened.iter();
     let mut view = view.clone();
-    for p in &mut view.properties {
-        if matches!(p.values, Column::I16(_)) {
-            *p = wide.next().expect("one widened column per int16 column");
+    for (p, wide) in view.properties.iter_mut().zip(&widened) {
+        if let Some(wide) = wide {
+            *p = wide;
         }
     }
     let mut out = std::io::BufWriter::with_capacity(1 << 20, out);
