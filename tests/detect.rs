@@ -439,4 +439,20 @@ fn standard_input_and_output_give_the_file_results() {
         "{}",
         stderr(&out)
     );
+    // Standard input has no name to write under in a directory, alone or beside files.
+    let into = dir.path().join("labelled/");
+    let into = into.to_str().unwrap();
+    let input = input.to_str().unwrap();
+    for args in [
+        vec!["detect", "-", "-o", into],
+        vec!["detect", input, "-", "-o", into],
+    ] {
+        let out = piped(&args);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(
+            stderr(&out).contains("-: no file name to write under"),
+            "{}",
+            stderr(&out)
+        );
+    }
 }

@@ -36,14 +36,13 @@ pub fn run(args: &DetectArgs) -> Result<()> {
     // The inputs labelled together: all of them (the tiles of a survey), or each on its own.
     let group = if args.separate { 1 } else { args.inputs.len() };
     let mut reports = Vec::new();
-    let stream = [&args.inputs[0], &args.output].contains(&&PathBuf::from("-"));
-    for (inputs, outputs) in args.inputs.chunks(group).zip(outputs.chunks(group)) {
-        if stream {
-            reports.push(label_stream(args, &detector, &options)?);
-            continue;
+    if [&args.inputs[0], &outputs[0]].contains(&&PathBuf::from("-")) {
+        reports.push(label_stream(args, &outputs[0], &detector, &options)?);
+    } else {
+        for (inputs, outputs) in args.inputs.chunks(group).zip(outputs.chunks(group)) {
+            let plan = Plan::of(inputs, read).map_err(hint)?;
+            reports.extend(label(&plan, &detector, outputs, &options)?);
         }
-        let plan = Plan::of(inputs, read).map_err(hint)?;
-        reports.extend(label(&plan, &detector, outputs, &options)?);
     }
     // A run killed outright (SIGKILL) leaves its temporary file behind: name those found.
     let files: Vec<&Path> = (outputs.iter().map(PathBuf::as_path))
@@ -84,8 +83,13 @@ pub fn run(args: &DetectArgs) -> Result<()> {
 }
 
 /// Labels one cloud read from standard input or written to standard output (`-`), whole.
-fn label_stream(args: &DetectArgs, detector: &Detector, options: &Options) -> Result<TileReport> {
-    let (input, output) = (&args.inputs[0], &args.output);
+fn label_stream(
+    args: &DetectArgs,
+    output: &Path,
+    detector: &Detector,
+    options: &Options,
+) -> Result<TileReport> {
+    let input = &args.inputs[0];
     let start = Instant::now();
     let (mut table, dropped) = match input == Path::new("-") {
         true => format::read_stream(std::io::stdin().lock(), None, args.drop_non_finite, input)
@@ -227,8 +231,9 @@ fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
     }
     let mut outputs: Vec<PathBuf> = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
-        let name =
-            (input.file_name()).with_context(|| format!("{}: no file name", input.display()))?;
+        let name = (input.file_name())
+            .filter(|_| input != Path::new("-"))
+            .with_context(|| format!("{}: no file name to write under", input.display()))?;
         let mut path = output.join(name);
         if let Some(ext) = &args.format {
             // `--format .las` means the extension, not `name..las`.
