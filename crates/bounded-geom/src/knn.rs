@@ -278,16 +278,10 @@ mod tests {
         a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
     }
 
-    /// SplitMix64 in [0, 1).
+    /// SplitMix64 in [0, 1), at f32's 24 bits (the top bits of `uniform_stream`'s 53).
     fn rng(seed: u64) -> impl FnMut() -> f32 {
-        let mut state = seed;
-        move || {
-            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-        }
+        let mut next = crate::uniform_stream(seed);
+        move || ((next() * (1u64 << 24) as f64).floor() / (1u64 << 24) as f64) as f32
     }
 
     /// A sphere surface, a dense blob, a line, exact duplicates and far outliers: every
