@@ -66,11 +66,7 @@ impl MethodResults {
 /// The median scores over `results` with `positive` the positive class; `None` without
 /// results.
 pub fn median_scores(results: &[ModelResult], positive: Class) -> Option<Scores> {
-    let confusions: Vec<_> = results
-        .iter()
-        .map(|r| r.matrix.binary(positive as u8))
-        .collect();
-    Scores::median(&confusions)
+    MethodResults::of("", results, positive).median()
 }
 
 /// One published result: a method's confusion on one model.
