@@ -34,6 +34,19 @@ def test_decimal_positions_exact_in_float32_are_float32(tmp_path):
     assert np.array_equal(pc.numpy(("x", "y", "z")).astype(np.float64), p)
 
 
+def test_decimals_of_single_floats_are_float32(tmp_path):
+    # A text cloud's 6-decimal coordinates: each the shortest decimal of a single float.
+    p = box_points(3000)
+    src, out = tmp_path / "box.xyz", tmp_path / "out.pcd"
+    np.savetxt(src, p, fmt="%.6f")
+    detect(src, out)
+    pc = pypcd4.PointCloud.from_path(out)
+    assert np.dtype(dict(zip(pc.fields, pc.types))["x"]) == np.float32
+    xyz = pc.numpy(("x", "y", "z"))
+    assert np.array_equal(xyz, np.round(p, 6).astype(np.float32))
+    assert [f"{v:.6f}" for v in xyz[:100].ravel()] == [f"{v:.6f}" for v in p[:100].ravel()]
+
+
 def test_positions_that_need_doubles_stay_doubles(tmp_path):
     p = box_points(3000) + [500_000.0, 5_400_000.0, 0.0]
     src, out = tmp_path / "utm.xyz", tmp_path / "out.pcd"

@@ -1,5 +1,6 @@
 """Text outputs read back with numpy: CloudCompare's header rules take columns whose name
-holds SCALAR as scalar fields (the probabilities otherwise look like normals to it)."""
+holds SCALAR as scalar fields (the probabilities otherwise look like normals to it), and
+it reads names only from a header line that starts with `//`, in CSV too."""
 
 import numpy as np
 
@@ -10,7 +11,7 @@ def test_header_names_the_results_as_scalar_fields(tmp_path):
     p = box_points(3000)
     src = tmp_path / "box.xyz"
     np.savetxt(src, p, fmt="%.6f")
-    for ext, sep, prefix in [("txt", " ", "//"), ("csv", ",", "")]:
+    for ext, sep, prefix in [("txt", " ", "//"), ("csv", ",", "//")]:
         out = tmp_path / f"out.{ext}"
         detect(src, out)
         header = out.read_text().split("\n", 1)[0]

@@ -113,7 +113,9 @@ pub enum Flavour {
     /// `scalar_class`, `scalar_p_nonedge`, `scalar_p_sharp`, `scalar_p_boundary`: CloudCompare
     /// loads `scalar_` properties (PLY) and columns whose header name holds `SCALAR` (text) as
     /// scalar fields without asking, named without the prefix; every other reader takes them
-    /// as ordinary properties.
+    /// as ordinary properties. CSV headers start with `//`, as in CloudCompare's own exports,
+    /// since its loader reads names from no other header line (checked with CloudCompare
+    /// 2.11's command line).
     #[default]
     CloudCompare,
     /// `class`, `p_nonedge`, `p_sharp`, `p_boundary`.
@@ -247,6 +249,7 @@ pub fn write_annotated_with(
     let properties = annotated(path, format, table, classes, probabilities, options)?;
     let mut view = table.view();
     view.properties = properties.iter().map(Cow::as_ref).collect();
+    view.csv_comment_header = options.flavour == Flavour::CloudCompare;
     write_view(path, &view)
 }
 
@@ -264,6 +267,7 @@ pub fn write_annotated_to(
     let properties = annotated(name, format, table, classes, probabilities, options)?;
     let mut view = table.view();
     view.properties = properties.iter().map(Cow::as_ref).collect();
+    view.csv_comment_header = options.flavour == Flavour::CloudCompare;
     write_to(out, &view, format, name)
 }
 
@@ -463,6 +467,7 @@ fn has_classes(classification: &Column) -> bool {
 mod tests {
     use super::*;
     use crate::format::read;
+    use crate::xyz::Separator;
     use bounded_geom::PointCloud;
 
     const CLASSES: [Class; 3] = [Class::Sharp, Class::NonEdge, Class::Boundary];
@@ -660,6 +665,50 @@ mod tests {
         assert_eq!("plain".parse(), Ok(Flavour::Plain));
         assert_eq!("meshlab".parse(), Ok(Flavour::MeshLab));
         assert!("open3d".parse::<Flavour>().unwrap_err().contains("meshlab"));
+    }
+
+    #[test]
+    fn csv_headers_are_comments_for_cloudcompare_only() {
+        let header = |format, flavour| {
+            let options = AnnotateOptions {
+                flavour,
+                ..AnnotateOptions::default()
+            };
+            let mut out = Vec::new();
+            let name = Path::new("out");
+            write_annotated_to(
+                &mut out,
+                format,
+                name,
+                &sample(),
+                &CLASSES,
+                &PROBABILITIES,
+                &options,
+            )
+            .unwrap();
+            let text = String::from_utf8(out).unwrap();
+            text.lines().next().unwrap().to_string()
+        };
+        let (csv, space) = (Format::Xyz(Separator::Comma), Format::Xyz(Separator::Space));
+        assert!(header(csv, Flavour::CloudCompare).starts_with("//x,y,z,intensity,"));
+        assert!(header(csv, Flavour::Plain).starts_with("x,y,z,intensity,"));
+        assert!(header(csv, Flavour::MeshLab).starts_with("x,y,z,"));
+        assert!(header(space, Flavour::Plain).starts_with("//x y z intensity "));
+        // Read back, the `//` header names the columns.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.csv");
+        write_annotated_with(
+            &path,
+            &sample(),
+            &CLASSES,
+            &PROBABILITIES,
+            &Default::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            values(&read(&path).unwrap(), "scalar_class"),
+            [1.0, 0.0, 2.0]
+        );
     }
 
     #[test]

@@ -269,6 +269,7 @@ pub fn write_labelled(path: &Path, labelled: &LabelledCloud) -> Result<(), DataE
         properties: vec![&class],
         exact_positions: None,
         las_header: None,
+        csv_comment_header: false,
     };
     write_view(path, &view)
 }

@@ -6,9 +6,11 @@
 //! PCL's packed `rgb` / `rgba` field becomes `red`, `green`, `blue` (and `alpha`) so colours
 //! survive conversion to other formats. Writing produces `DATA binary` and packs 8-bit
 //! `red`/`green`/`blue` back into `rgb`, which PCL and CloudCompare display. Positions are
-//! written as `F 4` when every coordinate is a single float (PCL's `PointXYZ` tools load
-//! nothing else), else as `F 8`, which keeps every coordinate (UTM-sized or finely
-//! quantised clouds); annotated outputs write `class` as `F 4`, since PCL's filters
+//! written as `F 4` when every coordinate is a single float or the decimal of one (`0.1`,
+//! `1.811728`: a text cloud's coordinates of up to 7 digits print back the same from the
+//! single float), since PCL's `PointXYZ` tools load nothing else and its filters misread
+//! `F 8` positions; else as `F 8`, which keeps every coordinate (UTM-sized or finely
+//! quantised clouds). Annotated outputs write `class` as `F 4`, since PCL's filters
 //! (`pcl_passthrough_filter -field class`) read the field they filter on as a float.
 
 use crate::DataError;
@@ -389,11 +391,13 @@ pub fn write_to(out: impl Write, view: &TableView<'_>, path: &Path) -> Result<()
     out.flush().map_err(|e| DataError::io(path, e))
 }
 
-/// `F32` when every position is a single float, as PCL's `PointXYZ` types and tools need
-/// (they find no `x` of another type), else `F64`, which loses nothing.
+/// `F32` when every coordinate is a single float or the decimal of one, as PCL's `PointXYZ`
+/// types and tools need (they find no `x` of another type), else `F64`, which loses nothing.
 fn position_type(view: &TableView<'_>) -> ScalarType {
     use rayon::prelude::*;
-    let single = |i| view.position(i).iter().all(|&c| f64::from(c as f32) == c);
+    // The shortest decimal of the single float (what `Display` prints) read as a double.
+    let decimal = |c: f64| f64::from(c as f32) == c || (c as f32).to_string().parse() == Ok(c);
+    let single = |i| view.position(i).into_iter().all(decimal);
     if view.position_type == PositionType::F32 || (0..view.len()).into_par_iter().all(single) {
         ScalarType::F32
     } else {
@@ -494,7 +498,7 @@ mod tests {
     }
 
     #[test]
-    fn positions_are_single_floats_when_that_loses_nothing() {
+    fn positions_are_single_floats_when_they_keep_the_decimals() {
         let fields = |t: &PointTable| {
             let mut bytes = Vec::new();
             write_to(&mut bytes, &t.view(), Path::new("t.pcd")).unwrap();
@@ -510,7 +514,7 @@ mod tests {
             let positions: Vec<[f64; 3]> = (0..back.len()).map(|i| view.position(i)).collect();
             (line("SIZE"), positions)
         };
-        // Doubles that are single floats (halves, quarters), then one that is not.
+        // Doubles that are single floats (halves, quarters).
         let text = |t: &str| {
             crate::xyz::read_from(Cursor::new(t.to_string()), Path::new("t.xyz")).unwrap()
         };
@@ -523,11 +527,25 @@ mod tests {
                 vec![[0.5, -1.25, 2.0], [1.5, 3.0, -4.0]]
             )
         );
-        let t = text("0.1 0 0\n1 0 0\n");
+        // Decimals of single floats: stored as those floats.
+        let t = text("0.1 0 0\n1.811728 0 -2.5e-7\n");
         assert_eq!(
             fields(&t),
-            ("SIZE 8 8 8".into(), vec![[0.1, 0.0, 0.0], [1.0, 0.0, 0.0]])
+            (
+                "SIZE 4 4 4".into(),
+                vec![
+                    [f64::from(0.1f32), 0.0, 0.0],
+                    [f64::from(1.811728f32), 0.0, f64::from(-2.5e-7f32)]
+                ]
+            )
         );
+        // One coordinate that no single float prints as (9 digits, a UTM easting in mm).
+        for odd in ["0.123456789", "500000.123"] {
+            let t = text(&format!("0.1 0 0\n{odd} 0 0\n"));
+            let (size, positions) = fields(&t);
+            assert_eq!(size, "SIZE 8 8 8", "{odd}");
+            assert_eq!(positions[1][0], odd.parse::<f64>().unwrap());
+        }
     }
 
     #[test]

@@ -523,6 +523,7 @@ impl PointTable {
             properties: self.properties.iter().collect(),
             exact_positions: self.exact_positions.as_ref(),
             las_header: self.las_header.as_ref(),
+            csv_comment_header: false,
         }
     }
 }
@@ -543,6 +544,10 @@ pub struct TableView<'a> {
     pub exact_positions: Option<&'a ExactPositions>,
     /// The LAS input's header records, for a LAS output (see [`PointTable`]).
     pub las_header: Option<&'a crate::las::InputHeader>,
+    /// Whether a CSV output's header line starts with `//`, as CloudCompare's own exports
+    /// do: its loader takes names from such a line only (without it, it guesses columns of
+    /// values in [-1, 1] to be normals). Space-separated headers always start with `//`.
+    pub csv_comment_header: bool,
 }
 
 impl TableView<'_> {

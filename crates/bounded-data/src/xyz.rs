@@ -9,7 +9,8 @@
 //! lines and later `#` / `//` comment lines are skipped, and so is a UTF-8 byte-order mark at
 //! the start. The file is streamed line by line.
 //!
-//! Writing emits a header line (`//x y z ...` for `.xyz`/`.txt`, `x,y,z,...` for `.csv`).
+//! Writing emits a header line (`//x y z ...` for `.xyz`/`.txt`; `x,y,z,...` for `.csv`,
+//! or `//x,y,z,...` when [`TableView::csv_comment_header`](crate::table::TableView) says so).
 
 use crate::DataError;
 use crate::records::{parse_row, read_line};
@@ -179,7 +180,7 @@ pub fn write_to(
         .into_iter()
         .chain(view.properties.iter().map(|p| p.name.as_str()))
         .collect();
-    let prefix = if separator == Separator::Space {
+    let prefix = if separator == Separator::Space || view.csv_comment_header {
         "//"
     } else {
         ""

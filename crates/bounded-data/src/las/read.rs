@@ -41,6 +41,7 @@ pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
     let header = Header::new(&mut input).map_err(|e| las_error(path, e))?;
     if header.point_format().is_compressed {
         check_chunk_table(&mut input, &header, &raw, path)?;
+        check_layer_sizes(&mut input, &header, &raw, path)?;
     }
     let (names, slots, record_len) = record_fields(&header, path)?;
     let total = usize::try_from(header.number_of_points()).map_err(|_| {
@@ -210,6 +211,91 @@ fn check_chunk_table(
                 ),
             ));
         }
+    }
+    input.rewind().map_err(io)
+}
+
+/// Checks the layer sizes of every chunk of a layered LAZ file (LAS 1.4 point formats 6-10,
+/// compressor 3) against the file, then rewinds `input`: at the start of each chunk the laz
+/// crate reads the chunk's first point whole, its point count and one `u32` size per layer,
+/// and resizes a buffer to every size before reading the layer (4 GB a layer from a 100-byte
+/// file, found by the `laz` fuzz target). The chunks are walked as the crate's sequential
+/// reader walks them, each right after the last one's layers; a chunk whose layers would
+/// end past the end of the file is refused. Where the walk leaves the file, the crate's own
+/// reading fails on it.
+fn check_layer_sizes(
+    mut input: impl Read + Seek,
+    header: &Header,
+    raw: &las::raw::Header,
+    path: &Path,
+) -> Result<(), DataError> {
+    let io = |e| DataError::io(path, e);
+    let Some(vlr) = (header.all_vlrs())
+        .find(|v| v.user_id == "laszip encoded" && v.record_id == 22204)
+        .map(|v| &v.data)
+    else {
+        return Ok(());
+    };
+    let u16_at = |at: usize| {
+        vlr.get(at..at + 2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+    };
+    let u32_at = |at: usize| {
+        vlr.get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    if u16_at(0) != Some(3) {
+        return Ok(());
+    }
+    // Items from byte 34, six bytes each (type, size, version): the layers of each.
+    let items = u16_at(32).unwrap_or(0) as usize;
+    let mut layers = 0u64;
+    for k in 0..items {
+        let (Some(kind), Some(size)) = (u16_at(34 + 6 * k), u16_at(36 + 6 * k)) else {
+            return Ok(());
+        };
+        layers += match kind {
+            10 => 9,               // Point14: xy and channel, z, classification, ..., GPS time
+            11 | 13 => 1,          // RGB14, Wavepacket14
+            12 => 2,               // RGBNIR14: colour, near infrared
+            14 => u64::from(size), // Byte14: one layer per byte
+            _ => return Ok(()),    // not a layered item: the crate refuses the file
+        };
+    }
+    let chunk_size = u64::from(u32_at(12).unwrap_or(u32::MAX));
+    let file_len = input.seek(SeekFrom::End(0)).map_err(io)?;
+    let record_len = u64::from(raw.point_data_record_length);
+    // After the chunk table's offset.
+    let mut at = u64::from(raw.offset_to_point_data) + 8;
+    let mut left = header.number_of_points();
+    let mut word = [0u8; 4];
+    while left > 0 && at + record_len + 4 * (layers + 1) <= file_len {
+        input.seek(SeekFrom::Start(at + record_len)).map_err(io)?;
+        input.read_exact(&mut word).map_err(io)?;
+        let count = u64::from(u32::from_le_bytes(word));
+        let mut bytes = 0u64;
+        for _ in 0..layers {
+            input.read_exact(&mut word).map_err(io)?;
+            bytes += u64::from(u32::from_le_bytes(word));
+        }
+        at += record_len + 4 * (layers + 1);
+        if bytes > file_len - at {
+            return Err(DataError::malformed(
+                path,
+                format!(
+                    "LAZ: a chunk at byte {at} declares {bytes} bytes of layers, but the file \
+                     ends {} bytes later",
+                    file_len - at
+                ),
+            ));
+        }
+        at += bytes;
+        // Fixed-size chunks hold `chunk_size` points; variable ones say how many.
+        left = left.saturating_sub(if chunk_size == u64::from(u32::MAX) {
+            count.max(1)
+        } else {
+            chunk_size.max(1)
+        });
     }
     input.rewind().map_err(io)
 }

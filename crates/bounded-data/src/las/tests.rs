@@ -245,6 +245,44 @@ fn a_chunk_count_beyond_the_file_fails_before_allocating() {
     assert_eq!(back.len(), 3);
 }
 
+#[test]
+fn layer_sizes_beyond_the_file_fail_before_allocating() {
+    // Two chunks of a layered LAZ (point format 6 and up): the first 50,000 points alone
+    // make the first chunk, whose end (their chunk table) is where the second chunk starts
+    // (the same bounds, so the same scale and offset).
+    let table_of = |n: usize| {
+        let cloud = PointCloud::from_iter_f64(n, |i| {
+            [(i % 1000) as f64 * 0.01, (i % 977) as f64 * 0.02, 0.0]
+        })
+        .unwrap();
+        write_bytes(&PointTable::new(cloud), true)
+    };
+    let (one, two) = (table_of(50_000), table_of(60_000));
+    let data = u32::from_le_bytes(two[96..100].try_into().unwrap()) as usize;
+    let record_len = usize::from(u16::from_le_bytes(two[105..107].try_into().unwrap()));
+    assert!(two[104] >= 6, "point format {}", two[104]);
+    assert_eq!(
+        read_from(Cursor::new(two.clone()), Path::new("t.laz"))
+            .unwrap()
+            .len(),
+        60_000
+    );
+    // Each chunk: its first point whole, its point count, then the layer sizes (u32).
+    for chunk in [data + 8, chunk_table_at(&one)] {
+        let mut bad = two.clone();
+        let size = chunk + record_len + 4;
+        bad[size..size + 4].copy_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+        let msg = read_from(Cursor::new(bad), Path::new("layers.laz"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.starts_with("layers.laz: LAZ: a chunk at byte "),
+            "{msg}"
+        );
+        assert!(msg.contains("bytes of layers, but the file ends"), "{msg}");
+    }
+}
+
 /// An output that takes `room` bytes, then fails as a full disk does.
 #[derive(Debug)]
 struct FullDisk {
