@@ -119,7 +119,8 @@ pub struct DetectArgs {
 pub struct TrainArgs {
     /// Training data: directories of labelled clouds, `abc:DIR` for ABC models (OBJ meshes
     /// beside their features YAML files), or `generated:KIND:SEED[:SHAPES]` for a synthetic
-    /// set made on the fly. Repeat to combine.
+    /// set made on the fly (free-form label rules after it: `:depth=1:angle=10:band=0.5`).
+    /// Repeat to combine.
     #[arg(long, required = true)]
     pub data: Vec<String>,
     /// Output model file.

@@ -319,7 +319,7 @@ impl TrainingSource {
 mod tests {
     use super::*;
     #[cfg(feature = "generator")]
-    use crate::synth::{NoiseDirection, SetKind};
+    use crate::synth::{LabelRule, NoiseDirection, SetKind};
 
     #[test]
     fn directory_roles_and_manifest_round_trip() {
@@ -382,12 +382,34 @@ mod tests {
         let config = SetConfig::from_spec("generated:boundary:7").unwrap();
         assert_eq!(config, SetConfig::new(SetKind::Boundary, 7, 60));
         assert_eq!(SetConfig::from_spec("generated:cad:1:5").unwrap().shapes, 5);
+        // Label rules of the free-form kind, in any order; unnamed fields keep the default.
+        let config = SetConfig::from_spec("generated:freeform:4:8:band=0.5:depth=1").unwrap();
+        let rule = LabelRule {
+            min_depth: 1.0,
+            band: 0.5,
+            ..LabelRule::default()
+        };
+        assert_eq!(config.label_rule, rule);
+        let config = SetConfig::from_spec("generated:freeform:4:8:angle=20").unwrap();
+        assert_eq!(config.label_rule.min_angle, 20.0);
         for (spec, expected) in [
-            ("generated:cad", "expected generated:KIND:SEED[:SHAPES]"),
             (
-                "generated:cad:1:2:3",
-                "expected generated:KIND:SEED[:SHAPES]",
+                "generated:cad",
+                "expected generated:KIND:SEED[:SHAPES[:RULE...]]",
             ),
+            (
+                "generated:cad:1:2:depth=1",
+                "label rules (depth=, angle=, band=) are for the freeform kind",
+            ),
+            (
+                "generated:freeform:1:2:3",
+                "\"3\" is not depth=, angle= or band= a number",
+            ),
+            (
+                "generated:freeform:1:2:depth=x",
+                "\"depth=x\" is not depth=, angle= or band= a number",
+            ),
+            ("generated:freeform:1:2:band=0", "label band 0"),
             (
                 "generated:cube:1",
                 "unknown set kind \"cube\" (cad, random, boundary, mixed, freeform)",

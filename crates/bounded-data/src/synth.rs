@@ -464,23 +464,42 @@ impl SetKind {
 }
 
 impl SetConfig {
-    /// The set of `generated:KIND:SEED[:SHAPES]` (60 shapes by default), with the defaults of
-    /// [`SetConfig::new`].
+    /// The set of `generated:KIND:SEED[:SHAPES[:RULE...]]` (60 shapes by default), with the
+    /// defaults of [`SetConfig::new`]; for the free-form kind, each `RULE` of `depth=D`,
+    /// `angle=A` or `band=B` sets that field of its [`LabelRule`] (`min_depth`, `min_angle`,
+    /// `band`), for example `generated:freeform:4:80:depth=1:band=0.5`.
     pub fn from_spec(spec: &str) -> Result<SetConfig, DataError> {
         let bad = |what: &str| DataError::Generator {
             what: format!("{spec:?}: {what}"),
         };
         let fields: Vec<&str> = spec.split(':').collect();
-        let (kind, seed, shapes) = match fields[..] {
-            ["generated", kind, seed] => (kind, seed, "60"),
-            ["generated", kind, seed, shapes] => (kind, seed, shapes),
-            _ => return Err(bad("expected generated:KIND:SEED[:SHAPES]")),
+        let (kind, seed, shapes, rules) = match fields[..] {
+            ["generated", kind, seed] => (kind, seed, "60", &[][..]),
+            ["generated", kind, seed, shapes, ref rules @ ..] => (kind, seed, shapes, rules),
+            _ => return Err(bad("expected generated:KIND:SEED[:SHAPES[:RULE...]]")),
         };
         let seed = seed.parse().map_err(|_| bad("bad seed"))?;
         let shapes = (shapes.parse().ok().filter(|&n: &usize| n > 0))
             .ok_or_else(|| bad("the shape count must be a whole number above 0"))?;
-        let config = SetConfig::new(SetKind::from_name(kind)?, seed, shapes);
-        config.validate()?;
+        let mut config = SetConfig::new(SetKind::from_name(kind)?, seed, shapes);
+        if !rules.is_empty() && config.kind != SetKind::Freeform {
+            return Err(bad(
+                "label rules (depth=, angle=, band=) are for the freeform kind",
+            ));
+        }
+        for rule in rules {
+            let not_a_rule = || bad(&format!("{rule:?} is not depth=, angle= or band= a number"));
+            let (name, value) = rule.split_once('=').ok_or_else(not_a_rule)?;
+            let value = value.parse::<f64>().map_err(|_| not_a_rule())?;
+            let label = &mut config.label_rule;
+            *match name {
+                "depth" => &mut label.min_depth,
+                "angle" => &mut label.min_angle,
+                "band" => &mut label.band,
+                _ => return Err(not_a_rule()),
+            } = value;
+        }
+        config.validate().map_err(|e| bad(&e.to_string()))?;
         Ok(config)
     }
 

@@ -5,9 +5,9 @@
 //! thresholds (a ceiling for information, never a setting). Rules whose labels the features
 //! rank well are the ones a model can be trained on.
 //!
-//! `cargo run --release -p bounded-nn --example label_rules -- [clouds] [seed]`
+//! `cargo run --release -p bounded-nn --example label_rules -- [clouds] [seed] [model]`
 //! (default 12 clouds of seed 2004, the training-side free-form validation seed, with the
-//! training noise along the normal).
+//! training noise along the normal; the embedded model unless a model file is given).
 
 use bounded_data::synth::{LabelRule, NoiseDirection, SetConfig, SetKind, generate};
 use bounded_geom::Class;
@@ -18,7 +18,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let clouds: usize = args.next().map_or(Ok(12), |a| a.parse())?;
     let seed: u64 = args.next().map_or(Ok(2004), |a| a.parse())?;
-    let detector = Detector::embedded()?;
+    let detector = match args.next() {
+        Some(path) => Detector::load(path)?,
+        None => Detector::embedded()?,
+    };
     let noise = [0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0];
     println!("| min depth | min angle | band | sharp % | AUC | MCC argmax | best MCC (at) |");
     println!("|---|---|---|---|---|---|---|");
