@@ -178,10 +178,8 @@ fn check_chunk_table(
 ) -> Result<(), DataError> {
     let io = |e| DataError::io(path, e);
     // The LASzip VLR's compressor: 2 (point-wise) and 3 (layered) are chunked.
-    let chunked = header
-        .all_vlrs()
-        .find(|v| v.user_id == "laszip encoded" && v.record_id == 22204)
-        .and_then(|v| v.data.first_chunk::<2>().copied())
+    let chunked = laszip_vlr(header)
+        .and_then(|data| data.first_chunk::<2>().copied())
         .is_some_and(|c| u16::from_le_bytes(c) >= 2);
     if !chunked {
         return Ok(());
@@ -230,10 +228,7 @@ fn check_layer_sizes(
     path: &Path,
 ) -> Result<(), DataError> {
     let io = |e| DataError::io(path, e);
-    let Some(vlr) = (header.all_vlrs())
-        .find(|v| v.user_id == "laszip encoded" && v.record_id == 22204)
-        .map(|v| &v.data)
-    else {
+    let Some(vlr) = laszip_vlr(header) else {
         return Ok(());
     };
     let u16_at = |at: usize| {
@@ -298,6 +293,13 @@ fn check_layer_sizes(
         });
     }
     input.rewind().map_err(io)
+}
+
+/// The data of the LASzip VLR (compressor, coder, version, chunk size, items), if any.
+fn laszip_vlr(header: &Header) -> Option<&[u8]> {
+    (header.all_vlrs())
+        .find(|v| v.user_id == "laszip encoded" && v.record_id == 22204)
+        .map(|v| v.data.as_slice())
 }
 
 /// The 8 bytes at `at`, if the file holds them.
