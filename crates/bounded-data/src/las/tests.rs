@@ -283,6 +283,42 @@ fn layer_sizes_beyond_the_file_fail_before_allocating() {
     }
 }
 
+#[test]
+fn a_corrupt_compressed_stream_is_an_error_not_a_panic() {
+    // The `laz` fuzz target's header (300 points in three colours) and the point data it
+    // found: the laz crate's arithmetic decoder indexes past its table and panics.
+    let n = 300;
+    let cloud = PointCloud::from_iter_f64(n, |i| {
+        [i as f64 * 0.1, (i % 17) as f64 * 0.2, (i % 5) as f64]
+    })
+    .unwrap();
+    let mut t = PointTable::new(cloud);
+    for (name, k) in [("red", 1), ("green", 2), ("blue", 3)] {
+        let values = (0..n).map(|i| (i * k % 256) as u8).collect();
+        t.set_property(Property::new(name, Column::U8(values)));
+    }
+    let bytes = write_bytes(&t, true);
+    let data = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+    let found = "e10100000000000000040000000000000000000000000000000000000000000000000000008b0000\
+        0000000000000000120000000a000000000000000800000000000000000000000000000000000000000000\
+        0012000000000000000000000000000000000000000000000000000000000000ffffffffffffffffffffff\
+        ffffffffff0000000000000000008b00000000000000000000120000000a00000000000000000000000000\
+        00005e5e5e";
+    let found = (0..found.len() / 2).map(|i| u8::from_str_radix(&found[2 * i..2 * i + 2], 16));
+    let bad = [
+        &bytes[..data],
+        &found.collect::<Result<Vec<u8>, _>>().unwrap(),
+    ]
+    .concat();
+    let msg = read_from(Cursor::new(bad), Path::new("corrupt.laz"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.starts_with("corrupt.laz: LAZ: the compressed point data is corrupt (the laz decoder"),
+        "{msg}"
+    );
+}
+
 /// An output that takes `room` bytes, then fails as a full disk does.
 #[derive(Debug)]
 struct FullDisk {
