@@ -12,6 +12,7 @@ use clap::Parser;
 
 fn main() -> std::process::ExitCode {
     remove_temporaries_on_signals();
+    bounded_data::las::quiet_decoder_panics();
     let args = cli::Cli::parse();
     if let Some(threads) = args.threads {
         // Only fails when a pool already exists, which cannot happen this early.
@@ -34,8 +35,7 @@ fn main() -> std::process::ExitCode {
 /// (`bounded_geom::atomic::stale_temporaries` finds them).
 fn remove_temporaries_on_signals() {
     use signal_hook::consts::{SIGINT, SIGTERM};
-    // Without a handler (it cannot fail but for a bad signal number) the signal still ends
-    // the process, only without the clean-up.
+    // Without a handler (only a bad signal number fails) signals end it without clean-up.
     let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
         return;
     };

@@ -55,7 +55,7 @@ use crate::DataError;
 use std::path::Path;
 
 pub use header::InputHeader;
-pub use read::read_from;
+pub use read::{quiet_decoder_panics, read_from};
 pub use write::write_to;
 
 /// LAS Classification code of BoundED's non-edge class ("unclassified").

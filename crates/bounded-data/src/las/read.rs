@@ -419,6 +419,24 @@ fn read_laz<R: Read + Seek + Send + Sync + 'static>(
     })
 }
 
+/// Installs a panic hook that stays quiet about the laz crate's decoder panics, which
+/// [`read_from`] turns into errors naming the file, and hands every other panic to the hook
+/// installed before it. For binaries: Rust's default hook prints a panic even when it is
+/// caught, so a corrupt LAZ file would show a panic line above its clean error.
+pub fn quiet_decoder_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            // The crate from the registry (`laz-0.13.0/src`) or its patched copy (`laz/src`).
+            let in_laz = |file: &str| file.contains("/laz-") || file.contains("/laz/src/");
+            if !info.location().is_some_and(|l| in_laz(l.file())) {
+                previous(info)
+            }
+        }));
+    });
+}
+
 /// How the point records of a file are split into blocks.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Blocks {
