@@ -388,34 +388,36 @@ fn read_laz<R: Read + Seek + Send + Sync + 'static>(
     let options = ReaderOptions::default().with_laz_parallelism(LazParallelism::No);
     let mut reader = Reader::with_options(input, options).map_err(|e| las_error(path, e))?;
     let mut data = PointDataBuilder::new().for_header(reader.header()).build();
-    // The crate's arithmetic decoder indexes its tables with values from the stream and
-    // panics on some corrupt streams (found by the `laz` fuzz target): that panic, and only
-    // a panic of this decoding, becomes an error naming the file.
-    let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        decode_blocks(blocks, 0, slots, |block, first| {
-            let ends = |what: String| {
-                let what = format!("LAS: point data ends within point {first} of {total}{what}");
-                DataError::malformed(path, what)
-            };
-            reader
-                .fill_points((block.len() / record_len) as u64, &mut data)
-                .map_err(|e| ends(format!(": {e}")))?;
-            let bytes = data.raw_bytes();
-            if bytes.len() != block.len() {
-                return Err(ends(String::new()));
+    decode_blocks(blocks, 0, slots, |block, first| {
+        let ends = |what: String| {
+            let what = format!("LAS: point data ends within point {first} of {total}{what}");
+            DataError::malformed(path, what)
+        };
+        // The crate's arithmetic decoder indexes its tables with values from the stream and
+        // panics on some corrupt streams (found by the `laz` fuzz target): a panic of this
+        // call, and only of this call, becomes an error naming the file.
+        let records = (block.len() / record_len) as u64;
+        let filled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            reader.fill_points(records, &mut data)
+        }));
+        match filled {
+            Ok(filled) => filled.map_err(|e| ends(format!(": {e}")))?,
+            Err(panic) => {
+                let why = (panic.downcast_ref::<String>().map(String::as_str))
+                    .or_else(|| panic.downcast_ref::<&str>().copied())
+                    .unwrap_or("no message");
+                let what = format!(
+                    "LAZ: the compressed point data is corrupt (the laz decoder failed: {why})"
+                );
+                return Err(DataError::malformed(path, what));
             }
-            block.copy_from_slice(bytes);
-            Ok(())
-        })
-    }));
-    decoded.unwrap_or_else(|panic| {
-        let why = (panic.downcast_ref::<String>().map(String::as_str))
-            .or_else(|| panic.downcast_ref::<&str>().copied())
-            .unwrap_or("no message");
-        Err(DataError::malformed(
-            path,
-            format!("LAZ: the compressed point data is corrupt (the laz decoder failed: {why})"),
-        ))
+        };
+        let bytes = data.raw_bytes();
+        if bytes.len() != block.len() {
+            return Err(ends(String::new()));
+        }
+        block.copy_from_slice(bytes);
+        Ok(())
     })
 }
 
