@@ -247,10 +247,7 @@ pub fn write_annotated_with(
 ) -> Result<(), DataError> {
     let format = Format::from_path(path)?;
     let properties = annotated(path, format, table, classes, probabilities, options)?;
-    let mut view = table.view();
-    view.properties = properties.iter().map(Cow::as_ref).collect();
-    view.csv_comment_header = options.flavour == Flavour::CloudCompare;
-    write_view(path, &view)
+    write_view(path, &annotated_view(table, &properties, options))
 }
 
 /// Writes `table` with the detection results like [`write_annotated_with`], in `format` to
@@ -265,10 +262,25 @@ pub fn write_annotated_to(
     options: &AnnotateOptions,
 ) -> Result<(), DataError> {
     let properties = annotated(name, format, table, classes, probabilities, options)?;
+    write_to(
+        out,
+        &annotated_view(table, &properties, options),
+        format,
+        name,
+    )
+}
+
+/// The view of `table` that writes `properties` (as [`annotated`] gives them), headed for
+/// the desktop tool of `options`' flavour.
+fn annotated_view<'a>(
+    table: &'a PointTable,
+    properties: &'a [Cow<'a, Property>],
+    options: &AnnotateOptions,
+) -> crate::table::TableView<'a> {
     let mut view = table.view();
     view.properties = properties.iter().map(Cow::as_ref).collect();
     view.csv_comment_header = options.flavour == Flavour::CloudCompare;
-    write_to(out, &view, format, name)
+    view
 }
 
 /// The properties of an annotated output of `table` in `format`: the input's without a
