@@ -246,8 +246,61 @@ pub fn write_annotated_with(
     options: &AnnotateOptions,
 ) -> Result<(), DataError> {
     let format = Format::from_path(path)?;
-    let properties = annotated(path, format, table, classes, probabilities, options)?;
+    let choices = Choices::of(table);
+    let properties = annotated(
+        path,
+        format,
+        table,
+        classes,
+        probabilities,
+        options,
+        choices,
+    )?;
     write_view(path, &annotated_view(table, &properties, options))
+}
+
+/// Writes a LAS or LAZ output with the detection results like [`write_annotated_with`],
+/// chunk by chunk, atomically: a cloud too large to hold, read with
+/// [`crate::las::read_chunks`]. `chunks` gets a function that writes one chunk (its table,
+/// classes and probabilities) and calls it for each in order; `choices` are
+/// [`Choices::of`] every chunk, merged, so that the output is the one the whole table
+/// would give.
+pub fn write_annotated_chunks(
+    path: &Path,
+    options: &AnnotateOptions,
+    choices: Choices,
+    chunks: impl FnOnce(
+        &mut dyn FnMut(&PointTable, &[Class], &[[f32; 3]]) -> Result<(), DataError>,
+    ) -> Result<(), DataError>,
+) -> Result<(), DataError> {
+    let format = Format::from_path(path)?;
+    let Format::Las { compressed } = format else {
+        return Err(DataError::InvalidOutput {
+            path: path.to_path_buf(),
+            what: "a cloud labelled in blocks is written as .las or .laz".into(),
+        });
+    };
+    bounded_geom::atomic::write_with(path, |file: &mut std::fs::File| {
+        let file = file.try_clone().map_err(|e| DataError::io(path, e))?;
+        let out = std::io::BufWriter::with_capacity(1 << 20, file);
+        let mut writer = crate::las::ChunkWriter::new(out, compressed, path);
+        chunks(&mut |table, classes, probabilities| {
+            let properties = annotated(
+                path,
+                format,
+                table,
+                classes,
+                probabilities,
+                options,
+                choices,
+            )?;
+            writer.write(&annotated_view(table, &properties, options))
+        })?;
+        let out = writer.finish()?;
+        out.into_inner()
+            .map_err(|e| DataError::io(path, e.into_error()))
+            .map(drop)
+    })
 }
 
 /// Writes `table` with the detection results like [`write_annotated_with`], in `format` to
@@ -261,7 +314,16 @@ pub fn write_annotated_to(
     probabilities: &[[f32; 3]],
     options: &AnnotateOptions,
 ) -> Result<(), DataError> {
-    let properties = annotated(name, format, table, classes, probabilities, options)?;
+    let choices = Choices::of(table);
+    let properties = annotated(
+        name,
+        format,
+        table,
+        classes,
+        probabilities,
+        options,
+        choices,
+    )?;
     write_to(
         out,
         &annotated_view(table, &properties, options),
@@ -292,6 +354,7 @@ fn annotated<'a>(
     classes: &[Class],
     probabilities: &[[f32; 3]],
     options: &AnnotateOptions,
+    choices: Choices,
 ) -> Result<Vec<Cow<'a, Property>>, DataError> {
     if classes.len() != table.len() || probabilities.len() != table.len() {
         return Err(DataError::InvalidOutput {
@@ -304,7 +367,7 @@ fn annotated<'a>(
             ),
         });
     }
-    let previous = Previous::of(&table.properties);
+    let previous = Previous::of(&table.properties, choices);
     let mut properties: Vec<Cow<'_, Property>> = Vec::with_capacity(table.properties.len() + 8);
     for (k, p) in table.properties.iter().enumerate() {
         if previous.restore == Some(k) {
@@ -313,14 +376,21 @@ fn annotated<'a>(
             properties.push(Cow::Borrowed(p));
         }
     }
-    add_annotation(&mut properties, format, classes, probabilities, options);
+    add_annotation(
+        &mut properties,
+        format,
+        classes,
+        probabilities,
+        options,
+        choices,
+    );
     Ok(properties)
 }
 
 /// Drops the results of a previous run from `table` (see the module documentation), so
 /// that their memory is free while the cloud is labelled; the annotated output is the same.
 pub fn drop_annotated(table: &mut PointTable) {
-    let previous = Previous::of(&table.properties);
+    let previous = Previous::of(&table.properties, Choices::of(table));
     if let Some(at) = previous.restore {
         table.properties[at].name = CLASSIFICATION.into();
     }
@@ -340,25 +410,84 @@ struct Previous {
     restore: Option<usize>,
 }
 
-impl Previous {
-    fn of(properties: &[Property]) -> Self {
+/// What an annotated output decides from every point of its input, not from each chunk
+/// alone: whether the input's Classification is meaningful, whether its colours and
+/// `quality` are a previous run's. A whole table's are [`Choices::of`] it; a file written in
+/// chunks ([`write_annotated_chunks`]) takes every chunk's, [merged](Choices::merge).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Choices {
+    /// The Classification the output keeps holds a code other than 0 and 1 (see
+    /// [`ClassTarget::Auto`]) at some point.
+    classified: bool,
+    /// The colours are class colours at every point.
+    class_coloured: bool,
+    /// `quality` repeats `p_sharp` at every point.
+    quality_repeats: bool,
+}
+
+impl Choices {
+    /// The choices for the points of `table`.
+    pub fn of(table: &PointTable) -> Self {
+        let properties = &table.properties;
         let find = |name: &str| properties.iter().position(|p| p.name == name);
-        let annotated = NAMES
-            .iter()
-            .find(|names| names[1..].iter().all(|n| find(n).is_some()));
-        let Some(names) = annotated else {
-            return Previous::default();
+        let quality_repeats = match (find(QUALITY), Previous::names(properties)) {
+            (Some(q), Some(names)) => {
+                find(names[2]).is_some_and(|p| properties[q].values == properties[p].values)
+            }
+            _ => false,
         };
+        let class_coloured = match RGB.map(find) {
+            [Some(r), Some(g), Some(b)] if Previous::names(properties).is_some() => {
+                let [r, g, b] = [r, g, b].map(|at| &properties[at].values);
+                class_coloured(r, g, b)
+            }
+            _ => false,
+        };
+        let mut choices = Choices {
+            classified: false,
+            class_coloured,
+            quality_repeats,
+        };
+        // The Classification the output keeps: a previous run's input one, if restored.
+        let previous = Previous::of(properties, choices);
+        let kept = match previous.restore {
+            Some(at) => Some(at),
+            None => find(CLASSIFICATION).filter(|at| !previous.ours.contains(at)),
+        };
+        choices.classified = kept.is_some_and(|at| has_classes(&properties[at].values));
+        choices
+    }
+
+    /// The choices for the points of two chunks.
+    pub fn merge(self, other: Self) -> Self {
+        Choices {
+            classified: self.classified || other.classified,
+            class_coloured: self.class_coloured && other.class_coloured,
+            quality_repeats: self.quality_repeats && other.quality_repeats,
+        }
+    }
+}
+
+impl Previous {
+    /// The names of a previous run's results among `properties`, if there are any.
+    fn names(properties: &[Property]) -> Option<&'static [&'static str; 4]> {
+        let find = |name: &str| properties.iter().position(|p| p.name == name);
+        NAMES
+            .iter()
+            .find(|names| names[1..].iter().all(|n| find(n).is_some()))
+    }
+
+    fn of(properties: &[Property], choices: Choices) -> Self {
+        let find = |name: &str| properties.iter().position(|p| p.name == name);
+        if Self::names(properties).is_none() {
+            return Previous::default();
+        }
         let mut ours: Vec<usize> = (NAMES.iter().flatten().chain(&CLASS_RGB))
             .filter_map(|n| find(n))
             .collect();
-        let p_sharp = &properties[find(names[2]).expect("found above")].values;
-        ours.extend(find(QUALITY).filter(|&q| properties[q].values == *p_sharp));
-        if let [Some(r), Some(g), Some(b)] = RGB.map(find) {
-            let [r, g, b] = [r, g, b].map(|at| &properties[at].values);
-            if class_coloured(r, g, b) {
-                ours.extend(RGB.map(find).map(Option::unwrap));
-            }
+        ours.extend(find(QUALITY).filter(|_| choices.quality_repeats));
+        if choices.class_coloured {
+            ours.extend(RGB.map(find).into_iter().flatten());
         }
         let has_class = NAMES.iter().any(|names| find(names[0]).is_some());
         let restore = if has_class {
@@ -390,6 +519,7 @@ fn add_annotation<'a>(
     classes: &[Class],
     probabilities: &[[f32; 3]],
     options: &AnnotateOptions,
+    choices: Choices,
 ) {
     let find = |properties: &[Cow<'a, Property>], name: &str| {
         properties.iter().position(|p| p.name == name)
@@ -406,8 +536,7 @@ fn add_annotation<'a>(
     };
     match (format, options.class_to) {
         (Format::Las { .. }, target) => {
-            let input = find(properties, CLASSIFICATION).map(|at| &properties[at].values);
-            let classified = input.is_some_and(has_classes);
+            let classified = choices.classified;
             match target {
                 ClassTarget::Auto if classified => added.push(Property::new(names[0], class())),
                 ClassTarget::Extra => added.push(Property::new(names[0], class())),

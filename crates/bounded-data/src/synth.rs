@@ -41,6 +41,7 @@ mod mesh;
 mod perturb;
 mod polyhedron;
 mod profile;
+pub mod recipe;
 mod relief;
 mod sample;
 mod scan;

@@ -13,7 +13,7 @@ use crate::halo::{self, Region};
 use crate::{Plan, ReadOptions, SurveyError, proof};
 
 /// How a survey is labelled and written.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Options {
     /// How the inputs are read.
     pub read: ReadOptions,
@@ -23,6 +23,24 @@ pub struct Options {
     /// a sample of its points (see [`detect_tile`]). Any radius gives the same labels; a
     /// small one costs more attempts, a large one more halo.
     pub radius: Option<f64>,
+    /// A survey of one LAS or LAZ file of more points than this is labelled in spatial
+    /// blocks of about this many points (each with its halo, see `crate::blocks`), in memory
+    /// bounded by a block's, and written as LAS or LAZ; any other file is held whole.
+    pub block_points: usize,
+}
+
+/// The default [`Options::block_points`]: about 4 GB of memory while labelling a block.
+pub const BLOCK_POINTS: usize = 1 << 25;
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            read: ReadOptions::default(),
+            annotate: AnnotateOptions::default(),
+            radius: None,
+            block_points: BLOCK_POINTS,
+        }
+    }
 }
 
 /// What happens while a tile is labelled, for a progress display.
@@ -32,6 +50,8 @@ pub enum Event<'a> {
     Loaded {
         /// The tile.
         tile: usize,
+        /// For a file labelled in blocks: which block with points, of how many.
+        block: Option<(usize, usize)>,
         /// 1 for the first labelling, 2 after its halo grew once, ...
         attempt: usize,
         /// The halo radius (absolute units).
@@ -40,6 +60,18 @@ pub enum Event<'a> {
         points: usize,
         /// The halo's points.
         halo: usize,
+    },
+    /// A pass over a file labelled in blocks (`pass`: `"split"` into blocks, or `"write"`)
+    /// has read `done` of its `total` points.
+    Streaming {
+        /// The tile.
+        tile: usize,
+        /// The pass.
+        pass: &'static str,
+        /// Points read so far.
+        done: usize,
+        /// The file's points.
+        total: usize,
     },
     /// Detection has labelled `done` of the `total` points loaded.
     Detecting {
@@ -179,6 +211,9 @@ pub fn detect_tile(
             plan.inputs().len()
         ))
     })?;
+    if crate::blocks::in_blocks(plan, tile, options)? {
+        return crate::blocks::detect_in_blocks(plan, tile, detector, output, options, progress);
+    }
     let detect_error = |source| SurveyError::Detect {
         path: input.path.clone(),
         source,
@@ -216,6 +251,7 @@ pub fn detect_tile(
         let total = cloud.len();
         progress(Event::Loaded {
             tile,
+            block: None,
             attempt: attempts,
             radius,
             points: n,
@@ -293,7 +329,7 @@ const SAMPLE: usize = 1024;
 /// computed within the tile: the `k0`-th neighbour distance, plus for a two-stage model the
 /// largest such distance among the neighbours. A retry labels the whole tile again, costing
 /// far more than a wider halo: the sample's largest reach, not a typical one.
-fn first_radius(detector: &Detector, cloud: &PointCloud) -> f64 {
+pub(crate) fn first_radius(detector: &Detector, cloud: &PointCloud) -> f64 {
     let k0 = detector.feature_config().largest_scale();
     let index = match Distinct::of(cloud) {
         Some(distinct) => KnnIndex::of_subset(cloud, distinct.firsts()),

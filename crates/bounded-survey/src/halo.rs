@@ -35,8 +35,15 @@ pub struct Region {
 impl Region {
     /// The region of tile `tile` of `plan` at `radius` (absolute units).
     pub fn around(plan: &Plan, tile: usize, radius: f64) -> Self {
+        let input = &plan.inputs()[tile];
+        Self::around_box(plan, input.lo, input.hi, radius)
+    }
+
+    /// The region of the box `lo`..`hi` (absolute coordinates: a tile's, or a block's of a
+    /// file labelled in blocks) in `plan` at `radius` (absolute units).
+    pub fn around_box(plan: &Plan, lo: [f64; 3], hi: [f64; 3], radius: f64) -> Self {
         let frame = plan.frame();
-        let (tile_lo, tile_hi) = local_box(&frame, plan.inputs()[tile].lo, plan.inputs()[tile].hi);
+        let (tile_lo, tile_hi) = local_box(&frame, lo, hi);
         let (survey_lo, survey_hi) = local_box(&frame, plan.bounds().0, plan.bounds().1);
         let r = radius / frame.scale;
         Self {
@@ -90,7 +97,7 @@ impl Region {
     }
 
     /// Whether the box of offsets `lo`..`hi` meets the region.
-    fn meets(&self, lo: [f64; 3], hi: [f64; 3]) -> bool {
+    pub(crate) fn meets(&self, lo: [f64; 3], hi: [f64; 3]) -> bool {
         (0..3).all(|a| lo[a] <= self.hi[a] && hi[a] >= self.lo[a])
     }
 
@@ -102,7 +109,7 @@ impl Region {
 
 /// The box `lo`..`hi` in the offsets of `frame` (the offsets of points inside it lie
 /// inside it: rounding to `f32` keeps order).
-fn local_box(frame: &Frame, lo: [f64; 3], hi: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+pub(crate) fn local_box(frame: &Frame, lo: [f64; 3], hi: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     (
         frame.local(lo).map(f64::from),
         frame.local(hi).map(f64::from),

@@ -11,7 +11,10 @@
 //! ([`proof`]); where one does not, the halo grows and the tile is labelled again, so the
 //! labels and probabilities are those of the one-cloud run, bit for bit. [`detect_tile`]
 //! labels one tile alone, for a distributed run (one task per tile; the Python package's
-//! `bounded.distributed` runs them on Dask).
+//! `bounded.distributed` runs them on Dask). A survey of one LAS or LAZ file too large to
+//! hold ([`Options::block_points`]) is labelled in spatial blocks of that file, each with its
+//! halo and the same proof, in three streaming passes (see `blocks.rs`); its output is the
+//! file labelled whole, byte for byte.
 //!
 //! Files may overlap in extent: the survey is the union of all their points, as when they
 //! are labelled as one cloud, so a surface scanned by two overlapping files has the points of
@@ -53,12 +56,13 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod blocks;
 mod detect;
 mod error;
 pub mod halo;
 mod plan;
 pub mod proof;
 
-pub use detect::{Event, Options, TileReport, detect_survey, detect_tile};
+pub use detect::{BLOCK_POINTS, Event, Options, TileReport, detect_survey, detect_tile};
 pub use error::SurveyError;
 pub use plan::{Input, Plan, ReadOptions};

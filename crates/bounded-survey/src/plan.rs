@@ -2,8 +2,9 @@
 //!
 //! A tile is one input file. A LAS or LAZ file's bounds come from its header, without a
 //! point read; any other format is read once for them (and read again when its tile or a
-//! neighbour's halo needs its points). A single huge file is one tile, held in memory whole
-//! while it is labelled; splitting it into spatial blocks is not done yet.
+//! neighbour's halo needs its points). A survey of a single LAS or LAZ file larger than
+//! `Options::block_points` is labelled in spatial blocks of that file (`crate::blocks`), never
+//! held whole; every other tile is held whole while it is labelled.
 //!
 //! Files may overlap in extent (flight lines, say): the survey is the union of their points,
 //! every point of every file present, exactly as when they are labelled as one cloud.

@@ -12,7 +12,7 @@ use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_data::peers;
 use bounded_data::picture::{Canvas, PALETTE, Series, precision_recall};
-use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind};
+use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind, recipe};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 use bounded_nn::baseline::CaBaseline;
@@ -27,43 +27,8 @@ use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
 
-/// The training recipe of the embedded model: generated sets only, with seeds disjoint from
-/// every evaluation set (adding the Bazazian clouds, whose edge bands are wider than the
-/// evaluation labels, lowered the Default and ABC MCC). The boundary set is twice the size
-/// of the others' share because boundary points are the rarest class (under 1%); doubling
-/// it raised the generated boundary F1 by about 0.02-0.03 and cost about 0.01-0.02 sharp MCC.
-/// README documents the equivalent `bounded train` command.
-pub const TRAINING_SETS: [&str; 3] = [
-    "generated:cad:1:120",
-    "generated:random:2:80",
-    "generated:boundary:3:120",
-];
-
-/// The noise levels of the training sets, in spacings: one per shape, drawn from these. Beyond
-/// the generator's default (0 to 0.6) they reach 1 spacing, so that scans noisier than the
-/// training data do not raise false alarms, and 0 twice keeps a quarter of the shapes clean.
-/// Measured against the default levels (two seeds, single runs, noise in every coordinate):
-/// MCC +0.11 to +0.13 at 0.75 spacing of noise and +0.24 at 1, Default +0.04, noisy ABC +0.02
-/// to +0.04, clean ABC and lightly noisy CAD within 0.011. Drawing 0 to 1 uniformly (14% clean)
-/// cost 0.03 on ABC.
-pub const TRAINING_NOISE: [f64; 8] = [0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0];
-
-/// Which way the training noise displaces points: along the surface normal, as a scanner's
-/// range error does. Against the same levels in every coordinate (two seeds, single runs):
-/// noisy ABC +0.013 to +0.040, ABC +0.010 to +0.032, the noise sweep +0.03 to +0.09, noise in
-/// every coordinate within 0.016, Default -0.023 and +0.013, boundary F1 +0.006 and -0.017.
-pub const TRAINING_NOISE_ALONG: NoiseDirection = NoiseDirection::Normal;
-
 /// The generated boundary evaluation set: its own seed, never used for training.
 const BOUNDARY_EVAL: (u64, usize) = (1001, 30);
-
-/// Training-side validation clouds for calibration and the sensitivity: the training kinds
-/// with seeds of their own, never trained on and never evaluated on.
-const VALIDATION_SETS: [&str; 3] = [
-    "generated:cad:2001:10",
-    "generated:random:2002:10",
-    "generated:boundary:2003:10",
-];
 
 /// The generated free-form feature-curve set: its own seed, never used for training.
 const FREEFORM_EVAL: (u64, usize) = (1003, 30);
@@ -113,7 +78,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         .with_context(|| format!("cannot create {}", args.output.display()))?;
 
     // Training data.
-    let training = training_side(&TRAINING_SETS, if args.quick { 4 } else { 1 })?;
+    let training = recipe::generate(&recipe::TRAINING_SETS, if args.quick { 4 } else { 1 })?;
 
     let full = FeatureConfig::ablation(16, FeatureGroups::ALL)?;
     let main = FeatureConfig::default();
@@ -127,9 +92,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         if args.quick { "quick" } else { "full" },
         schedule.iterations,
         schedule.runs,
-        TRAINING_SETS.join(", "),
-        TRAINING_NOISE,
-        along(TRAINING_NOISE_ALONG),
+        recipe::TRAINING_SETS.join(", "),
+        recipe::TRAINING_NOISE,
+        along(recipe::TRAINING_NOISE_ALONG),
         training.len(),
         training.iter().map(|c| c.1.cloud.len()).sum::<usize>()
     );
@@ -353,7 +318,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 /// other seeds), the sensitivity that maximises their median MCC, and MCC against the
 /// sensitivity on every evaluation set, for a user to choose a trade-off.
 fn calibration_section(detector: &Detector, sets: &[EvalSet]) -> Result<String> {
-    let validation = training_side(&VALIDATION_SETS, 1)?;
+    let validation = recipe::generate(&recipe::VALIDATION_SETS, 1)?;
     let on_validation = Calibration::measure(detector, &training_clouds(&validation))?;
     let mut out = format!(
         "## Calibration and sensitivity
@@ -362,7 +327,7 @@ Validation clouds ({}, training noise): expected \
          calibration error of p_sharp {:.4}, of p_boundary {:.4}; the highest median sharp MCC \
          at sensitivity {} (`--sensitivity`; without it, the most probable class).\n\n\
          p_sharp reliability on them:\n\n{}\nMedian sharp MCC against `--sensitivity`:\n\n",
-        VALIDATION_SETS.join(", "),
+        recipe::VALIDATION_SETS.join(", "),
         on_validation.sharp.expected_calibration_error(),
         on_validation.boundary.expected_calibration_error(),
         on_validation.best_sensitivity(),
@@ -429,18 +394,6 @@ fn load_eval(dir: &Path, key: &'static str, full: &FeatureConfig) -> Result<Eval
     }
     let clouds = featured(load_set(dir, Class::NonEdge)?, full)?;
     Ok(EvalSet { key, clouds })
-}
-
-/// The generated sets `specs` with the training noise, each `shrink` times smaller.
-fn training_side(specs: &[&str], shrink: usize) -> Result<Vec<(String, LabelledCloud)>> {
-    let mut clouds = Vec::new();
-    for spec in specs {
-        let mut config = SetConfig::from_spec(spec)?;
-        config.shapes /= shrink;
-        let config = config.with_noise(Some(&TRAINING_NOISE), TRAINING_NOISE_ALONG)?;
-        clouds.extend(synth::generate(&config)?);
-    }
-    Ok(clouds)
 }
 
 /// The generated evaluation set `config`, called `key`.

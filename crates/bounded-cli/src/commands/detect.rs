@@ -31,7 +31,8 @@ pub fn run(args: &DetectArgs) -> Result<()> {
             colours: args.colours,
             flavour: args.flavour,
         },
-        ..Options::default()
+        block_points: args.block_points,
+        radius: None,
     };
     // The inputs labelled together: all of them (the tiles of a survey), or each on its own.
     let group = if args.separate { 1 } else { args.inputs.len() };
@@ -134,13 +135,27 @@ fn label(
     let reports =
         bounded_survey::detect_survey(plan, detector, outputs, options, &mut |event| match event {
             Event::Loaded {
-                tile, points, halo, ..
+                tile,
+                block,
+                points,
+                halo,
+                ..
             } => {
-                let step = match tiles {
-                    1 => "detect".to_string(),
+                let step = match (block, tiles) {
+                    (Some((b, n)), _) => format!("block {}/{n}", b + 1),
+                    (None, 1) => "detect".to_string(),
                     _ => format!("tile {}/{tiles}", tile + 1),
                 };
                 bar = Some(progress::bar(&step, (points + halo) as u64, "points"));
+            }
+            Event::Streaming {
+                pass, done, total, ..
+            } => {
+                let b = bar.get_or_insert_with(|| progress::bar(pass, total as u64, "points"));
+                b.set_position(done as u64);
+                if done == total {
+                    bar.take().iter().for_each(|b| b.finish_and_clear());
+                }
             }
             Event::Detecting { done, .. } => bar.iter().for_each(|b| b.set_position(done as u64)),
             Event::Growing { .. } | Event::Written { .. } => {

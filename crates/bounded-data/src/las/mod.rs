@@ -55,8 +55,8 @@ use crate::DataError;
 use std::path::Path;
 
 pub use header::InputHeader;
-pub use read::{quiet_decoder_panics, read_from};
-pub use write::write_to;
+pub use read::{quiet_decoder_panics, read_chunks, read_from};
+pub use write::{ChunkWriter, write_to};
 
 /// LAS Classification code of BoundED's non-edge class ("unclassified").
 pub const CODE_NON_EDGE: u8 = 1;

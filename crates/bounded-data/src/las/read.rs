@@ -23,51 +23,200 @@ pub fn read_from<R: Read + Seek + Send + Sync + 'static>(
 /// [`read_from`] with at most `max_block` records per block (tests set it small to cross
 /// block boundaries with a few points).
 pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
-    mut input: R,
+    input: R,
     path: &Path,
     max_block: usize,
 ) -> Result<PointTable, DataError> {
-    let raw = check_declared_sizes(&mut input, path)?;
-    // LAS 1.4: the 64-bit count, also where the legacy one differs (see the module docs).
-    let zero_legacy = raw.large_file.is_some_and(|l| {
-        l.number_of_point_records != 0
-            && l.number_of_point_records != u64::from(raw.number_of_point_records)
-    });
-    let mut input = LegacyCount {
-        inner: input,
-        at: 0,
-        zero: zero_legacy,
-    };
-    let header = Header::new(&mut input).map_err(|e| las_error(path, e))?;
-    if header.point_format().is_compressed {
-        check_chunk_table(&mut input, &header, &raw, path)?;
-        check_layer_sizes(&mut input, &header, &raw, path)?;
+    let mut file = Opened::new(input, path, max_block)?;
+    let blocks = file.blocks;
+    let capacity = if file.compressed { 0 } else { blocks.total };
+    let decoded = file.decode(blocks, capacity)?;
+    file.table(decoded, false)
+}
+
+/// Reads the LAS or LAZ file at `path` in consecutive tables of at most `chunk` points, each
+/// handed to `sink` with the index of its first point: a file too large to hold, read in
+/// bounded memory. Every table has the file's header records and properties, the optional
+/// flags whether or not its points set them (every table has the same columns, so that their
+/// outputs join into one file), and the exact positions of the file
+/// (`TableView::position`). Returns the number of points read.
+pub fn read_chunks<E: From<DataError>>(
+    path: &Path,
+    chunk: usize,
+    mut sink: impl FnMut(usize, PointTable) -> Result<(), E>,
+) -> Result<usize, E> {
+    let input = std::fs::File::open(path).map_err(|e| DataError::io(path, e))?;
+    let input = std::io::BufReader::with_capacity(1 << 20, input);
+    let mut file = Opened::new(input, path, BLOCK)?;
+    let total = file.blocks.total;
+    let mut first = 0;
+    while first < total {
+        let n = chunk.max(1).min(total - first);
+        let blocks = Blocks {
+            total: n,
+            ..file.blocks
+        };
+        file.first = first;
+        let decoded = file.decode(blocks, n)?;
+        sink(first, file.table(decoded, true)?)?;
+        first += n;
     }
-    let (names, slots, record_len) = record_fields(&header, path)?;
-    let total = usize::try_from(header.number_of_points()).map_err(|_| {
-        DataError::malformed(
+    Ok(total)
+}
+
+/// A LAS or LAZ file whose header is read and checked, positioned at its first record.
+struct Opened<'p, R: Read + Seek + Send + Sync + 'static> {
+    path: &'p Path,
+    header: Header,
+    names: Vec<String>,
+    slots: Vec<Slot>,
+    blocks: Blocks,
+    compressed: bool,
+    records: Records<R>,
+    /// The index in the file of the next record [`Opened::decode`] reads.
+    first: usize,
+}
+
+/// Where the records come from.
+enum Records<R: Read + Seek + Send + Sync + 'static> {
+    /// The bytes of an uncompressed file.
+    Las(LegacyCount<R>),
+    /// The sequential LAZ decompressor, and its buffer.
+    Laz(Box<Reader>, las::PointData),
+}
+
+impl<'p, R: Read + Seek + Send + Sync + 'static> Opened<'p, R> {
+    fn new(mut input: R, path: &'p Path, max_block: usize) -> Result<Self, DataError> {
+        let raw = check_declared_sizes(&mut input, path)?;
+        // LAS 1.4: the 64-bit count, also where the legacy one differs (see the module docs).
+        let zero_legacy = raw.large_file.is_some_and(|l| {
+            l.number_of_point_records != 0
+                && l.number_of_point_records != u64::from(raw.number_of_point_records)
+        });
+        let mut input = LegacyCount {
+            inner: input,
+            at: 0,
+            zero: zero_legacy,
+        };
+        let header = Header::new(&mut input).map_err(|e| las_error(path, e))?;
+        let compressed = header.point_format().is_compressed;
+        if compressed {
+            check_chunk_table(&mut input, &header, &raw, path)?;
+            check_layer_sizes(&mut input, &header, &raw, path)?;
+        }
+        let (names, slots, record_len) = record_fields(&header, path)?;
+        let total = usize::try_from(header.number_of_points()).map_err(|_| {
+            DataError::malformed(
+                path,
+                format!(
+                    "LAS: {} points do not fit in memory",
+                    header.number_of_points()
+                ),
+            )
+        })?;
+        let blocks = Blocks {
+            total,
+            record_len,
+            block_len: block_len(record_len).min(max_block),
+        };
+        let records = if compressed {
+            laz_records(input, path)?
+        } else {
+            las_records(input, blocks, path)?
+        };
+        Ok(Self {
             path,
-            format!(
-                "LAS: {} points do not fit in memory",
-                header.number_of_points()
-            ),
-        )
-    })?;
-    let blocks = Blocks {
-        total,
-        record_len,
-        block_len: block_len(record_len).min(max_block),
-    };
-    let decoded = if header.point_format().is_compressed {
-        read_laz(input, blocks, &slots, path)?
-    } else {
-        read_las(input, blocks, &slots, path)?
-    };
-    let mut table = into_table(header.transforms(), names, &slots, decoded, path)?;
-    let input = InputHeader::of(&header).map_err(|e| las_error(path, e))?;
-    apply_scaling(&mut table.properties, &input.descriptors);
-    table.las_header = Some(input);
-    Ok(table)
+            header,
+            names,
+            slots,
+            blocks,
+            compressed,
+            records,
+            first: 0,
+        })
+    }
+
+    /// Decodes the next `blocks.total` records, with room for `capacity` in each column.
+    fn decode(&mut self, blocks: Blocks, capacity: usize) -> Result<Decoded, DataError> {
+        let (path, first, total) = (self.path, self.first, self.blocks.total);
+        let record_len = blocks.record_len;
+        let records = &mut self.records;
+        decode_blocks(blocks, capacity, &self.slots, |block, at| {
+            records.fill(block, first + at, total, record_len, path)
+        })
+    }
+
+    /// The table of `decoded`: with `every_column`, the optional flags too where no point
+    /// sets them.
+    fn table(&self, mut decoded: Decoded, every_column: bool) -> Result<PointTable, DataError> {
+        if every_column {
+            let n = decoded.xyz.len();
+            for column in &mut decoded.columns {
+                if let Column::U8(v) = column {
+                    v.resize(n, 0);
+                }
+            }
+        }
+        let transforms = self.header.transforms();
+        let names = self.names.clone();
+        let mut table = into_table(transforms, names, &self.slots, decoded, self.path)?;
+        let input = InputHeader::of(&self.header).map_err(|e| las_error(self.path, e))?;
+        apply_scaling(&mut table.properties, &input.descriptors);
+        table.las_header = Some(input);
+        Ok(table)
+    }
+}
+
+impl<R: Read + Seek + Send + Sync + 'static> Records<R> {
+    /// Fills `block` with the records from `first` on (of `total`, for errors).
+    fn fill(
+        &mut self,
+        block: &mut [u8],
+        first: usize,
+        total: usize,
+        record_len: usize,
+        path: &Path,
+    ) -> Result<(), DataError> {
+        match self {
+            Records::Las(input) => input.read_exact(block).map_err(|e| {
+                let what = format!("LAS: point data ends within point {first} of {total}");
+                truncated(path, what, e)
+            }),
+            Records::Laz(reader, data) => {
+                let ends = |what: String| {
+                    let what =
+                        format!("LAS: point data ends within point {first} of {total}{what}");
+                    DataError::malformed(path, what)
+                };
+                // The crate's arithmetic decoder indexes its tables with values from the
+                // stream and panics on some corrupt streams (found by the `laz` fuzz target):
+                // a panic of this call, and only of this call, becomes an error naming the
+                // file.
+                let records = (block.len() / record_len) as u64;
+                let filled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    reader.fill_points(records, data)
+                }));
+                match filled {
+                    Ok(filled) => filled.map_err(|e| ends(format!(": {e}")))?,
+                    Err(panic) => {
+                        let why = (panic.downcast_ref::<String>().map(String::as_str))
+                            .or_else(|| panic.downcast_ref::<&str>().copied())
+                            .unwrap_or("no message");
+                        let what = format!(
+                            "LAZ: the compressed point data is corrupt (the laz decoder failed: {why})"
+                        );
+                        return Err(DataError::malformed(path, what));
+                    }
+                };
+                let bytes = data.raw_bytes();
+                if bytes.len() != block.len() {
+                    return Err(ends(String::new()));
+                }
+                block.copy_from_slice(bytes);
+                Ok(())
+            }
+        }
+    }
 }
 
 /// A LAS file read with its legacy point count (the `u32` at byte 107) as 0 when `zero`, so
@@ -337,14 +486,13 @@ fn record_fields(
     Ok((names, slots, record_len))
 }
 
-/// Reads the `total` uncompressed records that start at the position of `input`, after
-/// checking that the file holds them: a corrupt count fails before anything is allocated.
-fn read_las(
-    mut input: impl Read + Seek,
+/// The `total` uncompressed records that start at the position of `input`, after checking
+/// that the file holds them: a corrupt count fails before anything is allocated.
+fn las_records<R: Read + Seek + Send + Sync + 'static>(
+    mut input: LegacyCount<R>,
     blocks: Blocks,
-    slots: &[Slot],
     path: &Path,
-) -> Result<Decoded, DataError> {
+) -> Result<Records<R>, DataError> {
     let Blocks {
         total, record_len, ..
     } = blocks;
@@ -361,64 +509,24 @@ fn read_las(
             ),
         ));
     }
-    decode_blocks(blocks, total, slots, |block, first| {
-        input.read_exact(block).map_err(|e| {
-            let what = format!("LAS: point data ends within point {first} of {total}");
-            truncated(path, what, e)
-        })
-    })
+    Ok(Records::Las(input))
 }
 
-/// Decompresses the `total` records of the LAZ file `input`. The columns grow with the
-/// records actually decoded (the compressed size does not bound the count), so a corrupt
+/// The records of the LAZ file `input`, decompressed as they are read. The columns grow with
+/// the records actually decoded (the compressed size does not bound the count), so a corrupt
 /// count ends in an error where the compressed data ends, not in a huge allocation.
-fn read_laz<R: Read + Seek + Send + Sync + 'static>(
-    mut input: R,
-    blocks: Blocks,
-    slots: &[Slot],
+fn laz_records<R: Read + Seek + Send + Sync + 'static>(
+    mut input: LegacyCount<R>,
     path: &Path,
-) -> Result<Decoded, DataError> {
-    let Blocks {
-        total, record_len, ..
-    } = blocks;
+) -> Result<Records<R>, DataError> {
     input.rewind().map_err(|e| DataError::io(path, e))?;
     // The sequential decompressor: the parallel one cannot read files without a chunk table
     // and sizes its buffers from the table's counts before checking them against the file,
     // and here it would only compete with the column decoding for the same cores.
     let options = ReaderOptions::default().with_laz_parallelism(LazParallelism::No);
-    let mut reader = Reader::with_options(input, options).map_err(|e| las_error(path, e))?;
-    let mut data = PointDataBuilder::new().for_header(reader.header()).build();
-    decode_blocks(blocks, 0, slots, |block, first| {
-        let ends = |what: String| {
-            let what = format!("LAS: point data ends within point {first} of {total}{what}");
-            DataError::malformed(path, what)
-        };
-        // The crate's arithmetic decoder indexes its tables with values from the stream and
-        // panics on some corrupt streams (found by the `laz` fuzz target): a panic of this
-        // call, and only of this call, becomes an error naming the file.
-        let records = (block.len() / record_len) as u64;
-        let filled = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            reader.fill_points(records, &mut data)
-        }));
-        match filled {
-            Ok(filled) => filled.map_err(|e| ends(format!(": {e}")))?,
-            Err(panic) => {
-                let why = (panic.downcast_ref::<String>().map(String::as_str))
-                    .or_else(|| panic.downcast_ref::<&str>().copied())
-                    .unwrap_or("no message");
-                let what = format!(
-                    "LAZ: the compressed point data is corrupt (the laz decoder failed: {why})"
-                );
-                return Err(DataError::malformed(path, what));
-            }
-        };
-        let bytes = data.raw_bytes();
-        if bytes.len() != block.len() {
-            return Err(ends(String::new()));
-        }
-        block.copy_from_slice(bytes);
-        Ok(())
-    })
+    let reader = Reader::with_options(input, options).map_err(|e| las_error(path, e))?;
+    let data = PointDataBuilder::new().for_header(reader.header()).build();
+    Ok(Records::Laz(Box::new(reader), data))
 }
 
 /// Installs a panic hook that stays quiet about the laz crate's decoder panics, which

@@ -1063,3 +1063,77 @@ fn header_bounds_are_the_points_box_without_reading_them() {
     let e = super::header_bounds(&short).unwrap_err().to_string();
     assert!(e.starts_with(&format!("{}: LAS", short.display())), "{e}");
 }
+
+#[test]
+fn a_file_read_and_written_in_chunks_is_the_file_read_and_written_whole() {
+    use crate::annotate::{AnnotateOptions, Choices, write_annotated_chunks, write_annotated_with};
+    use bounded_geom::Class;
+    let n = 1000;
+    let points: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let i = i as f64;
+            [
+                500_000.0 + 0.01 * i,
+                5_403_150.0 + (i * 0.37) % 3.0,
+                12.0 + (i * 0.13) % 1.0,
+            ]
+        })
+        .collect();
+    let mut table = PointTable::new(PointCloud::from_f64(&points).unwrap());
+    // Codes above 1 and a flag only in the last chunk: the whole file's choices keep the
+    // Classification and write the flag, whatever each chunk alone would choose.
+    let classification = (0..n).map(|i| if i > 900 { 6 } else { 1 }).collect();
+    table.set_property(Property::new("classification", Column::U8(classification)));
+    let synthetic = (0..n).map(|i| u8::from(i == 950)).collect();
+    table.set_property(Property::new("synthetic", Column::U8(synthetic)));
+    table.set_property(Property::new(
+        "intensity",
+        Column::U16((0..n as u16).collect()),
+    ));
+    let classes: Vec<Class> = (0..n).map(|i| Class::ALL[i % 3]).collect();
+    let probabilities: Vec<[f32; 3]> = (0..n).map(|i| [i as f32 / n as f32, 0.5, 0.25]).collect();
+    let dir = tempfile::tempdir().unwrap();
+    let options = AnnotateOptions::default();
+    for ext in ["las", "laz"] {
+        let mut input = dir.path().join(format!("in.{ext}"));
+        crate::format::write(&input, &table).unwrap();
+        // A first run's output, then that output labelled again (its results replaced).
+        for run in 0..2 {
+            let whole = dir.path().join(format!("whole{run}.{ext}"));
+            let read = crate::format::read(&input).unwrap();
+            write_annotated_with(&whole, &read, &classes, &probabilities, &options).unwrap();
+            let mut chunks = Vec::new();
+            let total = read_chunks(&input, 300, |first, t| {
+                chunks.push((first, t));
+                Ok::<(), DataError>(())
+            })
+            .unwrap();
+            assert_eq!((total, chunks.len()), (n, 4));
+            let choices = (chunks.iter().map(|(_, t)| Choices::of(t)))
+                .reduce(Choices::merge)
+                .unwrap();
+            let chunked = dir.path().join(format!("chunked{run}.{ext}"));
+            write_annotated_chunks(&chunked, &options, choices, |put| {
+                for (first, t) in &chunks {
+                    let at = *first..first + t.len();
+                    put(t, &classes[at.clone()], &probabilities[at])?;
+                }
+                Ok(())
+            })
+            .unwrap();
+            let (got, want) = (crate::format::read(&chunked), crate::format::read(&whole));
+            assert_eq!(got.unwrap(), want.unwrap(), "{ext} run {run}");
+            if ext == "las" {
+                assert!(std::fs::read(&chunked).unwrap() == std::fs::read(&whole).unwrap());
+            }
+            input = whole;
+        }
+    }
+    // Chunks of other columns than the first's do not fit its header.
+    let mut other = table.clone();
+    other.set_property(Property::new("height", Column::F32(vec![0.0; n])));
+    let mut writer = ChunkWriter::new(Cursor::new(Vec::new()), false, Path::new("t.las"));
+    writer.write(&table.view()).unwrap();
+    let e = writer.write(&other.view()).unwrap_err().to_string();
+    assert!(e.contains("t.las") && e.contains("other properties"), "{e}");
+}

@@ -34,15 +34,182 @@ pub fn write_to<W: Write + Seek + Send + Sync + 'static>(
     compressed: bool,
     path: &Path,
 ) -> Result<W, DataError> {
-    view.check(path)?;
-    let plan = Plan::new(view, compressed, path)?;
-    let mut out = if compressed {
-        write_laz(out, view, &plan, path)?
-    } else {
-        write_las(out, view, &plan, path)?
-    };
-    out.flush().map_err(|e| DataError::io(path, e))?;
-    Ok(out)
+    let mut writer = ChunkWriter::new(out, compressed, path);
+    writer.write(view)?;
+    writer.finish()
+}
+
+/// Writes one LAS 1.4 or LAZ file from consecutive views, each encoded as [`write_to`]
+/// encodes a whole one: the chunks of a file too large to hold (see
+/// [`read_chunks`](super::read_chunks)), in bounded memory. Every chunk must give the header
+/// of the first (the same properties and position type, and the same input header).
+pub struct ChunkWriter<'p, W: Write + Seek + Send + Sync + 'static> {
+    path: &'p Path,
+    compressed: bool,
+    state: State<W>,
+}
+
+/// What a [`ChunkWriter`] has written.
+enum State<W: Write + Seek + Send + Sync + 'static> {
+    /// Nothing yet.
+    Empty(W),
+    /// The header and the records so far.
+    Las {
+        out: W,
+        header: Header,
+        input: Option<InputHeader>,
+        stats: Stats,
+    },
+    /// The las crate's writer, which compresses and counts the records.
+    Laz {
+        writer: Box<Writer<FailOnce<W>>>,
+        header: Header,
+        input: Option<InputHeader>,
+    },
+    /// Taken by an error.
+    Failed,
+}
+
+impl<'p, W: Write + Seek + Send + Sync + 'static> ChunkWriter<'p, W> {
+    /// A writer of LAS (LAZ when `compressed`) to `out`; `path` names it in errors.
+    pub fn new(out: W, compressed: bool, path: &'p Path) -> Self {
+        Self {
+            path,
+            compressed,
+            state: State::Empty(out),
+        }
+    }
+
+    /// Appends the points of `view`.
+    pub fn write(&mut self, view: &TableView<'_>) -> Result<(), DataError> {
+        let path = self.path;
+        let las = |e| las_error(path, e);
+        view.check(path)?;
+        let plan = Plan::new(view, self.compressed, path)?;
+        self.state = match std::mem::replace(&mut self.state, State::Failed) {
+            State::Empty(mut out) if !self.compressed => {
+                plan.header.write_to(&mut out).map_err(las)?;
+                State::Las {
+                    out,
+                    header: plan.header.clone(),
+                    input: plan.input.cloned(),
+                    stats: Stats::default(),
+                }
+            }
+            State::Empty(out) => {
+                let options = WriterOptions::default().with_laz_parallelism(LazParallelism::Yes);
+                let out = FailOnce {
+                    inner: out,
+                    failed: false,
+                };
+                let writer =
+                    Writer::with_options(out, plan.header.clone(), options).map_err(las)?;
+                State::Laz {
+                    writer: Box::new(writer),
+                    header: plan.header.clone(),
+                    input: plan.input.cloned(),
+                }
+            }
+            State::Failed => return Err(invalid(path, "a previous chunk failed".into())),
+            state => state,
+        };
+        let io = |e| DataError::io(path, e);
+        match &mut self.state {
+            State::Las {
+                out, header, stats, ..
+            } => {
+                same_header(header, &plan.header, path)?;
+                let block_len = block_len(plan.record_len);
+                let chunk = encode_blocks(view, &plan, path, block_len, |block| {
+                    out.write_all(block).map_err(io)
+                })?;
+                *stats = stats.merge(chunk);
+            }
+            State::Laz { writer, header, .. } => {
+                same_header(header, &plan.header, path)?;
+                encode_blocks(view, &plan, path, laz_block_len(plan.record_len), |block| {
+                    let data = PointDataBuilder::new()
+                        .for_header(writer.header())
+                        .build_from_bytes(block.to_vec())
+                        .map_err(las)?;
+                    writer.write_points(&data).map_err(las)
+                })?;
+            }
+            State::Empty(_) | State::Failed => unreachable!("set above"),
+        }
+        Ok(())
+    }
+
+    /// Finishes the file (for LAS: the EVLRs, then the header again with the counts and
+    /// bounds of the records, the same size, so it overwrites the first one exactly) and
+    /// returns `out`, flushed.
+    pub fn finish(self) -> Result<W, DataError> {
+        let path = self.path;
+        let io = |e| DataError::io(path, e);
+        let las = |e| las_error(path, e);
+        let vlrs = |header: &Header| -> Vec<las::Vlr> { header.all_vlrs().cloned().collect() };
+        let mut out = match self.state {
+            State::Las {
+                mut out,
+                header,
+                input,
+                stats,
+            } => {
+                let start_of_evlrs = out.stream_position().map_err(io)?;
+                for evlr in header.evlrs() {
+                    let raw = evlr.clone().into_raw(true).map_err(las)?;
+                    raw.write_to(&mut out).map_err(las)?;
+                }
+                let mut raw = stats.raw_header(&header).map_err(las)?;
+                if let Some(evlr) = raw.evlr.as_mut() {
+                    evlr.start_of_first_evlr = start_of_evlrs;
+                }
+                finish(
+                    &mut raw,
+                    input.as_ref(),
+                    &vlrs(&header).iter().collect::<Vec<_>>(),
+                );
+                out.rewind().map_err(io)?;
+                raw.write_to(&mut out).map_err(las)?;
+                out
+            }
+            State::Laz {
+                mut writer,
+                header,
+                input,
+            } => {
+                writer.close().map_err(las)?;
+                let mut raw = writer.header().clone().into_raw().map_err(las)?;
+                finish(
+                    &mut raw,
+                    input.as_ref(),
+                    &vlrs(&header).iter().collect::<Vec<_>>(),
+                );
+                let mut out = writer.into_inner().map_err(las)?.inner;
+                out.rewind().map_err(io)?;
+                raw.write_to(&mut out).map_err(las)?;
+                out
+            }
+            State::Empty(_) => return Err(invalid(path, "no points were written".into())),
+            State::Failed => return Err(invalid(path, "a chunk failed".into())),
+        };
+        out.seek(SeekFrom::End(0)).map_err(io)?;
+        out.flush().map_err(io)?;
+        Ok(out)
+    }
+}
+
+/// Fails when a chunk's `header` differs from the first chunk's, `first`.
+fn same_header(first: &Header, header: &Header, path: &Path) -> Result<(), DataError> {
+    if first == header {
+        return Ok(());
+    }
+    Err(invalid(
+        path,
+        "a chunk has other properties or positions than the first: its records would not \
+         fit the header"
+            .into(),
+    ))
 }
 
 fn invalid(path: &Path, what: String) -> DataError {
@@ -150,12 +317,6 @@ impl<'a> Plan<'a> {
             counted_returns: Source::of(view, "return_number").map(|_| (return_at, shift, width)),
             input,
         })
-    }
-
-    /// Sets the header fields the las crate leaves to the writer (see [`finish`]).
-    fn finish(&self, raw: &mut las::raw::Header) {
-        let vlrs: Vec<&las::Vlr> = self.header.all_vlrs().collect();
-        finish(raw, self.input, &vlrs);
     }
 
     /// Encodes points `first..` into `records` (whole records) and returns their statistics.
@@ -400,71 +561,6 @@ fn encode_blocks(
         sink(block)
     })?;
     Ok(stats)
-}
-
-/// Writes uncompressed LAS: header and VLRs, the records, the EVLRs, then the header again
-/// with the counts and bounds of the records (same size, so it overwrites the first one
-/// exactly).
-fn write_las<W: Write + Seek + Send>(
-    mut out: W,
-    view: &TableView<'_>,
-    plan: &Plan<'_>,
-    path: &Path,
-) -> Result<W, DataError> {
-    let io = |e| DataError::io(path, e);
-    let las = |e| las_error(path, e);
-    plan.header.write_to(&mut out).map_err(las)?;
-    let block_len = block_len(plan.record_len);
-    let stats = encode_blocks(view, plan, path, block_len, |block| {
-        out.write_all(block).map_err(io)
-    })?;
-    let start_of_evlrs = out.stream_position().map_err(io)?;
-    for evlr in plan.header.evlrs() {
-        let raw = evlr.clone().into_raw(true).map_err(las)?;
-        raw.write_to(&mut out).map_err(las)?;
-    }
-    let mut raw = stats.raw_header(&plan.header).map_err(las)?;
-    if let Some(evlr) = raw.evlr.as_mut() {
-        evlr.start_of_first_evlr = start_of_evlrs;
-    }
-    plan.finish(&mut raw);
-    out.rewind().map_err(io)?;
-    raw.write_to(&mut out).map_err(las)?;
-    out.seek(SeekFrom::End(0)).map_err(io)?;
-    Ok(out)
-}
-
-/// Writes LAZ through the las crate's writer, which compresses the records (chunks in
-/// parallel) and counts them, then the header again with the fields it leaves out.
-fn write_laz<W: Write + Seek + Send + Sync + 'static>(
-    out: W,
-    view: &TableView<'_>,
-    plan: &Plan<'_>,
-    path: &Path,
-) -> Result<W, DataError> {
-    let las = |e| las_error(path, e);
-    let options = WriterOptions::default().with_laz_parallelism(LazParallelism::Yes);
-    let out = FailOnce {
-        inner: out,
-        failed: false,
-    };
-    let mut writer = Writer::with_options(out, plan.header.clone(), options).map_err(las)?;
-    encode_blocks(view, plan, path, laz_block_len(plan.record_len), |block| {
-        let data = PointDataBuilder::new()
-            .for_header(writer.header())
-            .build_from_bytes(block.to_vec())
-            .map_err(las)?;
-        writer.write_points(&data).map_err(las)
-    })?;
-    writer.close().map_err(las)?;
-    let mut raw = writer.header().clone().into_raw().map_err(las)?;
-    plan.finish(&mut raw);
-    let mut out = writer.into_inner().map_err(las)?.inner;
-    let io = |e| DataError::io(path, e);
-    out.rewind().map_err(io)?;
-    raw.write_to(&mut out).map_err(las)?;
-    out.seek(SeekFrom::End(0)).map_err(io)?;
-    Ok(out)
 }
 
 /// The las writer's output: after its first I/O error (a full disk), every later operation
