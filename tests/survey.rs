@@ -87,3 +87,36 @@ fn tiles_get_the_labels_of_the_survey_as_one_cloud() {
     }
     assert_eq!(first, all.len());
 }
+
+#[test]
+fn a_file_in_blocks_is_written_as_the_file_labelled_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.laz");
+    format::write(&input, &PointTable::new(box_cloud(12_000, 3).cloud)).unwrap();
+    let (whole, blocks) = (dir.path().join("whole.laz"), dir.path().join("blocks.laz"));
+    let run = bounded_paths(&[&"detect", &input, &"-o", &whole]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let run = bounded_paths(&[
+        &"detect",
+        &input,
+        &"-o",
+        &blocks,
+        &"--block-points",
+        &"3000",
+    ]);
+    let err = stderr(&run);
+    assert!(run.status.success() && err.contains("with halos"), "{err}");
+    assert_eq!(
+        format::read(&blocks).unwrap(),
+        format::read(&whole).unwrap()
+    );
+    // Only LAS or LAZ is written in blocks, and that is said before any work.
+    let ply = dir.path().join("blocks.ply");
+    let run = bounded_paths(&[&"detect", &input, &"-o", &ply, &"--block-points", &"3000"]);
+    let err = stderr(&run);
+    assert!(
+        !run.status.success() && err.contains("write .las or .laz"),
+        "{err}"
+    );
+    assert!(!ply.exists());
+}

@@ -108,13 +108,15 @@ pub fn write(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     })
 }
 
-/// Removes every live temporary file of this process and refuses new ones from then on
-/// (their writes fail): for a signal handler that exits the process next.
+/// Removes every live temporary file and [`ScratchDir`] of this process and refuses new ones
+/// from then on (their writes fail): for a signal handler that exits the process next.
 pub fn remove_temporaries() {
     let mut registry = registry();
     registry.closed = true;
     for path in registry.live.drain(..) {
-        let _ = std::fs::remove_file(path);
+        if std::fs::remove_file(&path).is_err() {
+            let _ = std::fs::remove_dir_all(path);
+        }
     }
 }
 
@@ -245,7 +247,6 @@ impl Temporary {
     /// Creates a new temporary file in `dir`, registered before it exists so that
     /// [`remove_temporaries`] never misses it.
     fn create(dir: &Path) -> io::Result<Self> {
-        static COUNTER: AtomicU64 = AtomicU64::new(0);
         let mut options = OpenOptions::new();
         options.read(true).write(true).create_new(true);
         #[cfg(unix)]
@@ -254,36 +255,8 @@ impl Temporary {
             // The umask applies, as for any new file.
             options.mode(0o666);
         }
-        for _ in 0..100 {
-            let stamp = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map_or(0, |d| d.as_nanos() as u64);
-            let unique = mix(stamp
-                ^ u64::from(std::process::id()) << 32
-                ^ COUNTER.fetch_add(1, Ordering::Relaxed));
-            let path = dir.join(format!("{PREFIX}{unique:016x}{SUFFIX}"));
-            // The lock is held while the file is created: a concurrent
-            // `remove_temporaries` sees it created and listed, or neither.
-            let mut registry = registry();
-            if registry.closed {
-                return Err(io::Error::new(
-                    io::ErrorKind::Interrupted,
-                    "interrupted: the process is exiting",
-                ));
-            }
-            match options.open(&path) {
-                Ok(file) => {
-                    registry.live.push(path.clone());
-                    return Ok(Self { path, file });
-                }
-                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
-                Err(e) => return Err(e),
-            }
-        }
-        Err(io::Error::new(
-            io::ErrorKind::AlreadyExists,
-            "no free temporary file name",
-        ))
+        let (path, file) = registered(dir, |path| options.open(path))?;
+        Ok(Self { path, file })
     }
 }
 
@@ -293,6 +266,80 @@ impl Drop for Temporary {
         let _ = std::fs::remove_file(&self.path);
         registry.live.retain(|p| *p != self.path);
     }
+}
+
+/// A scratch directory beside an output (`.bounded-<random>.part`, as temporary files are
+/// named), for the intermediate files of a long run: removed with everything in it when
+/// dropped, and by [`remove_temporaries`] on an interruption; a killed run's is among the
+/// [`stale_temporaries`].
+#[derive(Debug)]
+pub struct ScratchDir {
+    path: PathBuf,
+}
+
+impl ScratchDir {
+    /// Creates a scratch directory in `dir`.
+    pub fn create(dir: &Path) -> Result<Self, WriteError> {
+        let (path, ()) =
+            registered(dir, |path| std::fs::create_dir(path)).map_err(|source| WriteError {
+                path: dir.to_path_buf(),
+                source,
+            })?;
+        Ok(Self { path })
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let mut registry = registry();
+        let _ = std::fs::remove_dir_all(&self.path);
+        registry.live.retain(|p| *p != self.path);
+    }
+}
+
+/// Makes a new temporary entry in `dir` with `make` (a file or a directory) under a free
+/// name, listed in the registry before it exists so that [`remove_temporaries`] never misses
+/// it; returns its path and what `make` gave.
+fn registered<T>(
+    dir: &Path,
+    mut make: impl FnMut(&Path) -> io::Result<T>,
+) -> io::Result<(PathBuf, T)> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    for _ in 0..100 {
+        let stamp = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        let unique = mix(stamp
+            ^ u64::from(std::process::id()) << 32
+            ^ COUNTER.fetch_add(1, Ordering::Relaxed));
+        let path = dir.join(format!("{PREFIX}{unique:016x}{SUFFIX}"));
+        // The lock is held while the file is created: a concurrent
+        // `remove_temporaries` sees it created and listed, or neither.
+        let mut registry = registry();
+        if registry.closed {
+            return Err(io::Error::new(
+                io::ErrorKind::Interrupted,
+                "interrupted: the process is exiting",
+            ));
+        }
+        match make(&path) {
+            Ok(made) => {
+                registry.live.push(path.clone());
+                return Ok((path, made));
+            }
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Err(io::Error::new(
+        io::ErrorKind::AlreadyExists,
+        "no free temporary file name",
+    ))
 }
 
 /// A bijective 64-bit mix (splitmix64's finaliser): nearby inputs give unrelated names.
@@ -331,6 +378,30 @@ mod tests {
             .collect();
         names.sort();
         names
+    }
+
+    #[test]
+    fn a_scratch_directory_goes_with_its_files_and_a_leaked_one_is_stale() {
+        let dir = tempfile::tempdir().unwrap();
+        let scratch = ScratchDir::create(dir.path()).unwrap();
+        std::fs::write(scratch.path().join("0.points"), b"x").unwrap();
+        let name = scratch
+            .path()
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        assert!(name.starts_with(PREFIX) && name.ends_with(SUFFIX), "{name}");
+        // Live: not stale.
+        assert_eq!(stale_temporaries(dir.path()), Vec::<PathBuf>::new());
+        drop(scratch);
+        assert_eq!(entries(dir.path()), Vec::<String>::new());
+        // As a killed run leaves it.
+        let leaked = ScratchDir::create(dir.path()).unwrap();
+        let path = leaked.path().to_path_buf();
+        registry().live.retain(|p| *p != path);
+        std::mem::forget(leaked);
+        assert_eq!(stale_temporaries(dir.path()), vec![path]);
     }
 
     #[test]

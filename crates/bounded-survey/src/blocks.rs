@@ -14,8 +14,8 @@
 //!    label file, into one LAS or LAZ output, atomically.
 //!
 //! Peak memory is the largest block with its halo, plus a chunk of the file. The spill, block
-//! number and label files (34 bytes a point) are written to a directory beside the output and
-//! removed at the end.
+//! number and label files (34 bytes a point) are written to a scratch directory beside the
+//! output (`bounded_geom::atomic::ScratchDir`), removed at the end or on an interruption.
 
 use std::fs::{File, OpenOptions};
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
@@ -25,6 +25,7 @@ use std::time::{Duration, Instant};
 use bounded_data::annotate::{Choices, write_annotated_chunks};
 use bounded_data::format::Format;
 use bounded_data::{DataError, las};
+use bounded_geom::atomic::ScratchDir;
 use bounded_geom::{Class, PointCloud};
 use bounded_nn::{Detector, N_CLASSES};
 
@@ -115,7 +116,7 @@ impl Default for Block {
 
 /// The scratch files of a file labelled in blocks.
 struct Scratch {
-    dir: tempfile::TempDir,
+    dir: ScratchDir,
 }
 
 impl Scratch {
@@ -163,10 +164,7 @@ pub(crate) fn detect_in_blocks(
     let parent = output.parent().filter(|p| !p.as_os_str().is_empty());
     let parent = parent.unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).map_err(io(parent))?;
-    let dir = tempfile::Builder::new()
-        .prefix(".bounded-blocks-")
-        .tempdir_in(parent)
-        .map_err(io(parent))?;
+    let dir = ScratchDir::create(parent).map_err(DataError::from)?;
     let scratch = Scratch { dir };
     let grid = Grid::new(input.lo, input.hi, input.points, options.block_points);
     let (blocks, choices) = split(plan, tile, &grid, &scratch, progress)?;
