@@ -2,9 +2,10 @@
 //!
 //! The halo of tile `T` at radius `r` is every point of the other inputs inside `T`'s box
 //! grown by `r` on each side (the tile's *region*). Each other input whose box meets the
-//! region is read once, its points inside kept and the rest dropped with the file's table,
-//! so no neighbour is held whole beyond its read. A side of the region at or beyond the
-//! survey's bounds is taken as infinitely far: no point of the survey lies past it.
+//! region is read once, its points inside kept: a LAS or LAZ neighbour in chunks, so that
+//! only a chunk of it is held, any other format whole while it is read. A side of the region
+//! at or beyond the survey's bounds is taken as infinitely far: no point of the survey lies
+//! past it.
 //!
 //! The tile and its halo form one cloud in the survey's frame ([`Plan::frame`]), in the
 //! survey's point order (inputs in plan order, each file's points in file order): an
@@ -15,6 +16,8 @@
 
 use std::ops::Range;
 
+use bounded_data::format::Format;
+use bounded_data::las;
 use bounded_data::table::PointTable;
 use bounded_geom::{Frame, PointCloud};
 
@@ -124,16 +127,40 @@ pub fn offsets(
     table: &PointTable,
 ) -> Result<Vec<[f32; 3]>, SurveyError> {
     let mut all = Vec::with_capacity(table.len());
-    each_offset(plan, index, table, |p| all.push(p))?;
+    each_offset(plan, index, 0, table, &mut |p| all.push(p))?;
     Ok(all)
 }
 
-/// Calls `f` with the offset of every point of `table` (as [`offsets`] gives them).
+/// Points per chunk when a LAS or LAZ neighbour is read for its halo.
+const CHUNK: usize = 1 << 20;
+
+/// Calls `f` with the offset of every point of the input `index` of `plan`, read as `read`
+/// says: a LAS or LAZ file in chunks, so that only a chunk of it is held, any other whole.
+fn each_offset_of_file(
+    plan: &Plan,
+    index: usize,
+    read: ReadOptions,
+    f: &mut dyn FnMut([f32; 3]),
+) -> Result<(), SurveyError> {
+    let path = &plan.inputs()[index].path;
+    if let Format::Las { .. } = Format::from_path(path)? {
+        las::read_chunks(path, CHUNK, |first, table| {
+            each_offset(plan, index, first, &table, f)
+        })?;
+        return Ok(());
+    }
+    let (table, _) = read.read(path)?;
+    each_offset(plan, index, 0, &table, f)
+}
+
+/// Calls `f` with the offset of every point of `table`, the points of input `index` of
+/// `plan` from its point `first` on (as [`offsets`] gives them).
 fn each_offset(
     plan: &Plan,
     index: usize,
+    first: usize,
     table: &PointTable,
-    mut f: impl FnMut([f32; 3]),
+    f: &mut dyn FnMut([f32; 3]),
 ) -> Result<(), SurveyError> {
     let input = &plan.inputs()[index];
     let frame = plan.frame();
@@ -143,7 +170,7 @@ fn each_offset(
         if !(0..3).all(|a| (input.lo[a]..=input.hi[a]).contains(&p[a])) {
             return Err(SurveyError::OutsideBounds {
                 path: input.path.clone(),
-                index: i,
+                index: first + i,
                 position: p,
                 lo: input.lo,
                 hi: input.hi,
@@ -179,9 +206,8 @@ pub fn load(
         if j == tile || !region.meets(lo, hi) {
             continue;
         }
-        let (table, _) = read.read(&input.path)?;
         let near = if j < tile { &mut before } else { &mut after };
-        each_offset(plan, j, &table, |p| {
+        each_offset_of_file(plan, j, read, &mut |p| {
             if region.contains(p) {
                 near.push(p);
             }
