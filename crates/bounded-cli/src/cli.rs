@@ -100,7 +100,7 @@ pub struct DetectArgs {
     pub separate: bool,
     /// A single LAS or LAZ input of more points than this is labelled in spatial blocks of
     /// about this many, each with the halo that gives it the labels of the whole file, in
-    /// memory bounded by a block's (about 120 bytes a point); its output is LAS or LAZ.
+    /// memory bounded by a block's (about 100 bytes a point); its output is LAS or LAZ.
     #[arg(long, default_value_t = bounded_survey::BLOCK_POINTS, value_name = "N")]
     pub block_points: usize,
     /// Where LAS/LAZ outputs put the class: `auto` (the Classification field, codes 1 / 64 /

@@ -43,7 +43,9 @@ pub fn plan_survey(
 /// Labels tile ``tile`` of ``plan`` (as ``plan_survey`` returns it) with the halo that makes
 /// its labels those of the whole survey labelled as one cloud, and writes it to ``output``
 /// (atomically, so a retried task rewrites the same file). The options are ``detect``'s
-/// and ``bounded detect``'s; ``radius`` is the first halo radius (default: estimated).
+/// and ``bounded detect``'s; ``radius`` is the first halo radius (default: estimated);
+/// ``block_points`` is ``bounded detect --block-points``: a plan of one LAS or LAZ file of
+/// more points is labelled in spatial blocks of about this many, in a block's memory.
 ///
 /// Returns a dict of what it took: ``points``, ``halo`` (the points of the halo that
 /// proved the tile), ``labelled``, ``radius``, ``attempts``, ``detection_seconds``,
@@ -51,7 +53,7 @@ pub fn plan_survey(
 #[pyfunction]
 #[pyo3(signature = (
     plan, tile, output, *, model = None, scales = None, sensitivity = None, fast = false,
-    drop_non_finite = false, radius = None, threads = None
+    drop_non_finite = false, radius = None, block_points = None, threads = None
 ))]
 #[allow(clippy::too_many_arguments)] // Python keyword arguments, one per option.
 pub fn detect_tile<'py>(
@@ -65,6 +67,7 @@ pub fn detect_tile<'py>(
     fast: bool,
     drop_non_finite: bool,
     radius: Option<f64>,
+    block_points: Option<usize>,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let inputs = (plan.into_iter())
@@ -84,6 +87,7 @@ pub fn detect_tile<'py>(
     let options = Options {
         read: ReadOptions { drop_non_finite },
         radius,
+        block_points: block_points.unwrap_or(bounded_survey::BLOCK_POINTS),
         ..Options::default()
     };
     let report = py

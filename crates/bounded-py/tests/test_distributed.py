@@ -68,3 +68,22 @@ def test_one_tile_with_a_small_first_halo_grows_it(survey, tmp_path):
     with pytest.raises(ValueError, match="no tile 4"):
         bounded.detect_tile(plan, 4, tmp_path / "none.ply")
 
+
+
+def test_one_large_file_in_blocks_is_the_file_labelled_whole(tmp_path):
+    path = tmp_path / "box.laz"
+    bounded.write(path, open_box(n=9000, size=(8.0, 6.0, 2.0), seed=5))
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True) as cluster:
+        with Client(cluster) as client:
+            whole = bounded.distributed.detect_tiles([path], tmp_path / "whole", client)
+            blocks = bounded.distributed.detect_tiles(
+                [path], tmp_path / "blocks", client, block_points=2000, threads=1
+            )
+    (xyz, fields), (want_xyz, want) = bounded.read(blocks[0]), bounded.read(whole[0])
+    assert np.array_equal(xyz, want_xyz) and fields.keys() == want.keys()
+    assert all(np.array_equal(fields[k], want[k]) for k in want)
+    plan = bounded.plan_survey([path])
+    report = bounded.detect_tile(plan, 0, tmp_path / "b.laz", block_points=2000)
+    assert report["halo"] > 0 and report["points"] == 9000, report
+    with pytest.raises(ValueError, match="write .las or .laz"):
+        bounded.detect_tile(plan, 0, tmp_path / "b.ply", block_points=2000)

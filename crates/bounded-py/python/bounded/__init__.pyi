@@ -146,6 +146,7 @@ def detect_tile(
     fast: bool = False,
     drop_non_finite: bool = False,
     radius: float | None = None,
+    block_points: int | None = None,
     threads: int | None = None,
 ) -> dict[str, float]:
     """Labels tile ``tile`` of ``plan`` with the halo that makes its labels those of the whole

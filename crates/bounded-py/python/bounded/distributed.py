@@ -29,8 +29,9 @@ def detect_tiles(inputs, output_dir, client=None, *, format=None, **options):
 
     ``client`` is a ``dask.distributed.Client``; without one, a ``LocalCluster`` is started
     and closed afterwards. ``options`` are ``bounded.detect_tile``'s: ``model`` (a model file's
-    path), ``scales``, ``sensitivity``, ``fast``, ``drop_non_finite``, ``radius``, ``threads``
-    (per task).
+    path), ``scales``, ``sensitivity``, ``fast``, ``drop_non_finite``, ``radius``,
+    ``block_points`` (a single LAS or LAZ file of more points is one task that labels it in
+    spatial blocks) and ``threads`` (per task).
     """
     inputs = [pathlib.Path(p) for p in inputs]
     output_dir = pathlib.Path(output_dir)
