@@ -20,6 +20,8 @@ trap 'rm -rf "$(dirname "$venv")"' EXIT
 python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "$here/requirements-test.txt"
 echo "ci.sh: test requirements installed ($((SECONDS - start)) s)"
+# The README examples' test imports Open3D.
+bash "$repo/.ci/open3d-libusb.sh"
 
 # Nothing to do after .ci/run's `cargo test --workspace`.
 (cd "$repo" && cargo test --workspace --locked --no-run --quiet)

@@ -12,14 +12,7 @@ if [ ! -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
 fi
 "$venv/bin/pip" install --quiet -r "$here/requirements.txt"
-# Open3D's wheel links libusb; Debian packages it apart.
-if ! "$venv/bin/python" -c "import open3d" 2>/dev/null; then
-    if ldconfig -p | grep -q "libusb-1.0.so.0"; then
-        "$venv/bin/python" -c "import open3d"  # some other failure: show it
-    fi
-    echo "installing libusb-1.0-0 for open3d" >&2
-    apt-get update -qq && apt-get install -y -qq libusb-1.0-0 >/dev/null
-fi
+bash "$repo/.ci/open3d-libusb.sh"
 # The desktop tools of test_desktop.py, from Debian's packages; without apt-get (or root)
 # those tests skip and say why.
 if ! command -v CloudCompare >/dev/null || ! command -v pcl_passthrough_filter >/dev/null ||
