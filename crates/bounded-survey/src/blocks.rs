@@ -29,8 +29,8 @@ use bounded_geom::atomic::ScratchDir;
 use bounded_geom::{Class, PointCloud};
 use bounded_nn::{Detector, N_CLASSES};
 
-use crate::detect::{Event, Options, TileReport, first_radius};
-use crate::halo::{Region, local_box};
+use crate::detect::{Event, Options, TileReport, first_radius, output_directory};
+use crate::halo::{Region, local_box, position_in_bounds};
 use crate::{Plan, SurveyError, proof};
 
 /// Points per chunk of the split and write passes.
@@ -161,10 +161,7 @@ pub(crate) fn detect_in_blocks(
             output.display()
         )));
     }
-    let parent = output.parent().filter(|p| !p.as_os_str().is_empty());
-    let parent = parent.unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).map_err(io(parent))?;
-    let dir = ScratchDir::create(parent).map_err(DataError::from)?;
+    let dir = ScratchDir::create(output_directory(output)?).map_err(DataError::from)?;
     let scratch = Scratch { dir };
     let grid = Grid::new(input.lo, input.hi, input.points, options.block_points);
     let (blocks, choices) = split(plan, tile, &grid, &scratch, progress)?;
@@ -236,16 +233,7 @@ fn split(
             choices = Some(choices.map_or(chunk, |c| c.merge(chunk)));
             let view = table.view();
             for i in 0..table.len() {
-                let p = view.position(i);
-                if !(0..3).all(|a| (input.lo[a]..=input.hi[a]).contains(&p[a])) {
-                    return Err(SurveyError::OutsideBounds {
-                        path: input.path.clone(),
-                        index: first + i,
-                        position: p,
-                        lo: input.lo,
-                        hi: input.hi,
-                    });
-                }
+                let p = position_in_bounds(input, &view, first, i)?;
                 let b = grid.cell(p);
                 let block = &mut blocks[b];
                 block.points += 1;
@@ -298,18 +286,34 @@ fn append(path: &Path, buffer: &mut Vec<u8>) -> Result<(), DataError> {
 }
 
 /// The points of block `b`'s spill file, in file order: index and offsets.
-fn spilled(scratch: &Scratch, b: usize) -> Result<Vec<(u64, [f32; 3])>, DataError> {
+/// Fails when the file does not hold the block's `points` (the scratch disk was changed
+/// behind the run's back).
+fn spilled(scratch: &Scratch, b: usize, points: usize) -> Result<Vec<(u64, [f32; 3])>, DataError> {
     let path = scratch.spill(b);
     let bytes = std::fs::read(&path).map_err(io(&path))?;
-    let word = |r: &[u8], at: usize| -> [u8; 4] { r[at..at + 4].try_into().expect("4 bytes") };
+    if bytes.len() != points * SPILLED {
+        let what = format!(
+            "holds {} bytes, not the {points} points spilled",
+            bytes.len()
+        );
+        return Err(io(&path)(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            what,
+        )));
+    }
     Ok(bytes
         .chunks_exact(SPILLED)
         .map(|r| {
-            let index = u64::from_le_bytes(r[..8].try_into().expect("8 bytes"));
-            let p = [8, 12, 16].map(|at| f32::from_le_bytes(word(r, at)));
+            let index = u64::from_le_bytes(bytes_at(r, 0));
+            let p = [8, 12, 16].map(|at| f32::from_le_bytes(bytes_at(r, at)));
             (index, p)
         })
         .collect())
+}
+
+/// The `N` bytes of `bytes` at `at`.
+fn bytes_at<const N: usize>(bytes: &[u8], at: usize) -> [u8; N] {
+    std::array::from_fn(|k| bytes[at + k])
 }
 
 /// A file labelled in blocks, after the split pass.
@@ -346,7 +350,7 @@ impl Run<'_> {
             path: input.path.clone(),
             what,
         };
-        let own = spilled(scratch, b)?;
+        let own = spilled(scratch, b, blocks[b].points)?;
         let n = own.len();
         let own_points: Vec<[f32; 3]> = own.iter().map(|r| r.1).collect();
         let k0 = detector.feature_config().largest_scale();
@@ -378,7 +382,7 @@ impl Run<'_> {
                 if other == b || o.points == 0 || !region.meets(lo, hi) {
                     continue;
                 }
-                let near = spilled(scratch, other)?
+                let near = spilled(scratch, other, o.points)?
                     .into_iter()
                     .filter(|r| region.contains(r.1));
                 loaded.extend(near.map(|(i, p)| (i, p, u32::MAX)));
@@ -505,10 +509,7 @@ impl Run<'_> {
                             let (bytes, taken) = &mut labels[b];
                             let at = *taken * LABEL;
                             *taken += 1;
-                            std::array::from_fn(|k| {
-                                let v = &bytes[at + 4 * k..at + 4 * k + 4];
-                                f32::from_le_bytes(v.try_into().expect("4 bytes"))
-                            })
+                            std::array::from_fn(|k| f32::from_le_bytes(bytes_at(bytes, at + 4 * k)))
                         })
                         .collect();
                     let classes: Vec<Class> =

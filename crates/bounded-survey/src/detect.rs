@@ -293,12 +293,7 @@ pub fn detect_tile(
             radius,
         });
     };
-    if let Some(parent) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).map_err(|source| bounded_data::DataError::Io {
-            path: parent.to_path_buf(),
-            source,
-        })?;
-    }
+    output_directory(output)?;
     let classes: Vec<Class> = probabilities.iter().map(|p| detector.decide(p)).collect();
     format::write_annotated_with(output, &table, &classes, &probabilities, &options.annotate)?;
     let report = TileReport {
@@ -319,6 +314,17 @@ pub fn detect_tile(
         report: &report,
     });
     Ok(report)
+}
+
+/// The directory of `output` (`.` for a bare file name), created if missing.
+pub(crate) fn output_directory(output: &Path) -> Result<&Path, SurveyError> {
+    let parent = output.parent().filter(|p| !p.as_os_str().is_empty());
+    let parent = parent.unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(|source| bounded_data::DataError::Io {
+        path: parent.to_path_buf(),
+        source,
+    })?;
+    Ok(parent)
 }
 
 /// Points sampled for the first radius.

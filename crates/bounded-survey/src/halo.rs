@@ -18,10 +18,10 @@ use std::ops::Range;
 
 use bounded_data::format::Format;
 use bounded_data::las;
-use bounded_data::table::PointTable;
+use bounded_data::table::{PointTable, TableView};
 use bounded_geom::{Frame, PointCloud};
 
-use crate::{Plan, ReadOptions, SurveyError};
+use crate::{Input, Plan, ReadOptions, SurveyError};
 
 /// A tile's box grown by a radius, in the offsets of the survey's frame; sides beyond the
 /// survey's bounds are infinitely far.
@@ -166,19 +166,30 @@ fn each_offset(
     let frame = plan.frame();
     let view = table.view();
     for i in 0..table.len() {
-        let p = view.position(i);
-        if !(0..3).all(|a| (input.lo[a]..=input.hi[a]).contains(&p[a])) {
-            return Err(SurveyError::OutsideBounds {
-                path: input.path.clone(),
-                index: first + i,
-                position: p,
-                lo: input.lo,
-                hi: input.hi,
-            });
-        }
-        f(frame.local(p));
+        f(frame.local(position_in_bounds(input, &view, first, i)?));
     }
     Ok(())
+}
+
+/// The absolute position of point `i` of `view`, point `first + i` of `input`; fails when it
+/// lies outside the input's declared box.
+pub(crate) fn position_in_bounds(
+    input: &Input,
+    view: &TableView<'_>,
+    first: usize,
+    i: usize,
+) -> Result<[f64; 3], SurveyError> {
+    let p = view.position(i);
+    if !(0..3).all(|a| (input.lo[a]..=input.hi[a]).contains(&p[a])) {
+        return Err(SurveyError::OutsideBounds {
+            path: input.path.clone(),
+            index: first + i,
+            position: p,
+            lo: input.lo,
+            hi: input.hi,
+        });
+    }
+    Ok(p)
 }
 
 /// A tile with its halo, as one cloud.

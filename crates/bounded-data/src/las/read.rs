@@ -29,8 +29,9 @@ pub(super) fn read_in_blocks<R: Read + Seek + Send + Sync + 'static>(
 ) -> Result<PointTable, DataError> {
     let mut file = Opened::new(input, path, max_block)?;
     let blocks = file.blocks;
-    let capacity = if file.compressed { 0 } else { blocks.total };
-    let decoded = file.decode(blocks, capacity)?;
+    let compressed = file.header.point_format().is_compressed;
+    let capacity = if compressed { 0 } else { blocks.total };
+    let decoded = file.decode(0, blocks, capacity)?;
     file.table(decoded, false)
 }
 
@@ -56,8 +57,7 @@ pub fn read_chunks<E: From<DataError>>(
             total: n,
             ..file.blocks
         };
-        file.first = first;
-        let decoded = file.decode(blocks, n)?;
+        let decoded = file.decode(first, blocks, n)?;
         sink(first, file.table(decoded, true)?)?;
         first += n;
     }
@@ -71,10 +71,7 @@ struct Opened<'p, R: Read + Seek + Send + Sync + 'static> {
     names: Vec<String>,
     slots: Vec<Slot>,
     blocks: Blocks,
-    compressed: bool,
     records: Records<R>,
-    /// The index in the file of the next record [`Opened::decode`] reads.
-    first: usize,
 }
 
 /// Where the records come from.
@@ -130,15 +127,19 @@ impl<'p, R: Read + Seek + Send + Sync + 'static> Opened<'p, R> {
             names,
             slots,
             blocks,
-            compressed,
             records,
-            first: 0,
         })
     }
 
-    /// Decodes the next `blocks.total` records, with room for `capacity` in each column.
-    fn decode(&mut self, blocks: Blocks, capacity: usize) -> Result<Decoded, DataError> {
-        let (path, first, total) = (self.path, self.first, self.blocks.total);
+    /// Decodes the next `blocks.total` records, the file's from `first` on, with room for
+    /// `capacity` in each column.
+    fn decode(
+        &mut self,
+        first: usize,
+        blocks: Blocks,
+        capacity: usize,
+    ) -> Result<Decoded, DataError> {
+        let (path, total) = (self.path, self.blocks.total);
         let record_len = blocks.record_len;
         let records = &mut self.records;
         decode_blocks(blocks, capacity, &self.slots, |block, at| {

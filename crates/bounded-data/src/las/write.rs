@@ -147,7 +147,9 @@ impl<'p, W: Write + Seek + Send + Sync + 'static> ChunkWriter<'p, W> {
         let path = self.path;
         let io = |e| DataError::io(path, e);
         let las = |e| las_error(path, e);
-        let vlrs = |header: &Header| -> Vec<las::Vlr> { header.all_vlrs().cloned().collect() };
+        fn vlrs(header: &Header) -> Vec<&las::Vlr> {
+            header.all_vlrs().collect()
+        }
         let mut out = match self.state {
             State::Las {
                 mut out,
@@ -164,11 +166,7 @@ impl<'p, W: Write + Seek + Send + Sync + 'static> ChunkWriter<'p, W> {
                 if let Some(evlr) = raw.evlr.as_mut() {
                     evlr.start_of_first_evlr = start_of_evlrs;
                 }
-                finish(
-                    &mut raw,
-                    input.as_ref(),
-                    &vlrs(&header).iter().collect::<Vec<_>>(),
-                );
+                finish(&mut raw, input.as_ref(), &vlrs(&header));
                 out.rewind().map_err(io)?;
                 raw.write_to(&mut out).map_err(las)?;
                 out
@@ -180,11 +178,7 @@ impl<'p, W: Write + Seek + Send + Sync + 'static> ChunkWriter<'p, W> {
             } => {
                 writer.close().map_err(las)?;
                 let mut raw = writer.header().clone().into_raw().map_err(las)?;
-                finish(
-                    &mut raw,
-                    input.as_ref(),
-                    &vlrs(&header).iter().collect::<Vec<_>>(),
-                );
+                finish(&mut raw, input.as_ref(), &vlrs(&header));
                 let mut out = writer.into_inner().map_err(las)?.inner;
                 out.rewind().map_err(io)?;
                 raw.write_to(&mut out).map_err(las)?;
