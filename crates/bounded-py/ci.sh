@@ -26,10 +26,20 @@ bash "$repo/.ci/open3d-libusb.sh"
 # Nothing to do after .ci/run's `cargo test --workspace`.
 (cd "$repo" && cargo test --workspace --locked --no-run --quiet)
 # Without build isolation the maturin of the test requirements builds, found on PATH.
+build_log="$(dirname "$venv")/build.log"
 PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--locked --profile dev" \
-    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --no-build-isolation \
-    "$here"
+    "$venv/bin/python" -m pip install --verbose --disable-pip-version-check --no-build-isolation \
+    "$here" >"$build_log" 2>&1 || { tail -n 60 "$build_log"; exit 1; }
 echo "ci.sh: package built and installed ($((SECONDS - start)) s)"
+# Only PyO3 (built for this interpreter) and the bindings may compile here: anything else
+# means this crate's features differ from the workspace's and CI compiles burn twice.
+rebuilt="$(grep -oE 'Compiling [a-z0-9_-]+' "$build_log" | awk '{print $2}' |
+    grep -vxE 'pyo3(-[a-z-]+)?|numpy|bounded-py' || true)"
+if [ -n "$rebuilt" ]; then
+    echo "ci.sh: the package build recompiled what cargo test had built:" $rebuilt >&2
+    echo "ci.sh: pin their features in crates/bounded-py/Cargo.toml" >&2
+    exit 1
+fi
 
 # Outside the source tree, so that the tests import the installed package.
 cd "$(dirname "$venv")"
