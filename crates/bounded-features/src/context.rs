@@ -18,10 +18,23 @@ pub const CONTEXT_NAMES: [&str; CONTEXT_PER_SCALE] = [
     "ctx_sharp_excess",
 ];
 
+/// What the context reads of a first classifier's result at one point.
+pub(crate) trait FirstResult: Copy + Sync {
+    /// Its sharp and boundary probabilities.
+    fn sharp_boundary(self) -> [f32; 2];
+}
+
+/// Probabilities (non-edge, sharp, boundary), as callers give them.
+impl FirstResult for [f32; 3] {
+    fn sharp_boundary(self) -> [f32; 2] {
+        [self[1], self[2]]
+    }
+}
+
 /// The context of a point's neighbourhood at every scale. `row` holds the query point first,
 /// then its neighbours by increasing distance (at least `scales[0]` of them); `scales` are
 /// neighbour counts, strictly descending, each neighbourhood a prefix of `row`;
-/// `probabilities` are a first classifier's (non-edge, sharp, boundary) per cloud point.
+/// `first` holds a first classifier's result per cloud point.
 /// Calls `put(scale index, values)` with, per scale:
 /// - the mean sharp and the mean boundary probability over the neighbourhood;
 /// - the distance from the query point to the sharp-probability-weighted centroid, over the
@@ -32,11 +45,11 @@ pub const CONTEXT_NAMES: [&str; CONTEXT_PER_SCALE] = [
 /// One pass over the largest neighbourhood serves every scale: the sums run from the query
 /// point outwards and are read off as each smaller prefix ends. Unit-free, so it does not
 /// change when the cloud is moved, rotated or scaled.
-pub(crate) fn contexts(
+pub(crate) fn contexts<P: FirstResult>(
     points: &[[f32; 3]],
     row: &[u32],
     scales: &[usize],
-    probabilities: &[[f32; 3]],
+    first: &[P],
     mut put: impl FnMut(usize, [f32; CONTEXT_PER_SCALE]),
 ) {
     let x = points[row[0] as usize];
@@ -45,19 +58,19 @@ pub(crate) fn contexts(
         [0, 1, 2].map(|a| f64::from(y[a]) - f64::from(x[a]))
     };
     let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    let own = f64::from(probabilities[row[0] as usize][1]);
+    let own = f64::from(first[row[0] as usize].sharp_boundary()[0]);
     let (mut sharp, mut boundary) = (0.0f64, 0.0f64);
     let mut centroid = [0.0f64; 3];
     let mut summed = 0;
     // Smallest scale first, so each prefix extends the last.
     for (scale, &k) in scales.iter().enumerate().rev() {
         for &j in &row[summed..k] {
-            let p = probabilities[j as usize];
-            sharp += f64::from(p[1]);
-            boundary += f64::from(p[2]);
+            let [s, b] = first[j as usize].sharp_boundary().map(f64::from);
+            sharp += s;
+            boundary += b;
             let d = offset(j);
             for a in 0..3 {
-                centroid[a] += f64::from(p[1]) * d[a];
+                centroid[a] += s * d[a];
             }
         }
         summed = k;

@@ -3,7 +3,7 @@
 use bounded_geom::{Distinct, GeomError, KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
-use crate::context::{CONTEXT_PER_SCALE, contexts};
+use crate::context::{CONTEXT_PER_SCALE, FirstResult, contexts};
 use crate::local::{LANES, Scratch, group_features};
 use crate::{FeatureConfig, FeatureError};
 
@@ -325,13 +325,13 @@ pub(crate) fn plain_features(
 }
 
 /// The rows of `chunk` with their `plain` features (as [`plain_features`] gives them), each
-/// scale's beside its context of `probabilities`, into `out` (resized), in parallel.
-pub(crate) fn in_context(
+/// scale's beside its context of the `first` results, into `out` (resized), in parallel.
+pub(crate) fn in_context<P: FirstResult>(
     points: &[[f32; 3]],
     chunk: &NeighbourChunk,
     config: &FeatureConfig,
     plain: &[f32],
-    probabilities: &[[f32; 3]],
+    first: &[P],
     out: &mut Vec<f32>,
 ) {
     let per_scale = config.features_per_scale();
@@ -346,15 +346,9 @@ pub(crate) fn in_context(
             {
                 out[..per_scale].copy_from_slice(features);
             }
-            contexts(
-                points,
-                row,
-                &config.scales,
-                probabilities,
-                |scale, values| {
-                    let at = scale * stride + per_scale;
-                    out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
-                },
-            );
+            contexts(points, row, &config.scales, first, |scale, values| {
+                let at = scale * stride + per_scale;
+                out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
+            });
         });
 }

@@ -20,6 +20,7 @@ use std::collections::VecDeque;
 use bounded_geom::{KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
+use crate::context::FirstResult;
 use crate::extract::{in_context, plain_features, radii, values_per_point, with_index};
 use crate::{FeatureBlock, FeatureConfig, FeatureError};
 
@@ -80,9 +81,7 @@ fn staged(
         position[i as usize] = pos as u32;
     }
     let mut stage = FirstStage {
-        probabilities: vec![[0.0; 3]; cloud.len()],
-        radius: vec![0.0; cloud.len()],
-        classified: vec![false; cloud.len()],
+        results: vec![Classified::NOT_YET; cloud.len()],
         block: Vec::new(),
         first,
     };
@@ -93,23 +92,23 @@ fn staged(
     let mut emit = |p: Pending, stage: &FirstStage<'_>| {
         output.points.clear();
         output.points.extend_from_slice(p.chunk.queries());
+        let results = &stage.results;
         in_context(
             points,
             &p.chunk,
             config,
             &p.features.values,
-            &stage.probabilities,
+            results,
             &mut output.values,
         );
         // The context reads the first stage of every neighbour, which read its own
         // neighbours: the point's reach plus the largest of theirs.
-        let radius = &stage.radius;
         output.reach.resize(p.chunk.len(), 0.0);
         (output.reach.par_iter_mut())
             .zip(p.features.reach.par_iter())
             .zip(p.chunk.rows().par_chunks(p.chunk.k()))
             .for_each(|((out, &own), row)| {
-                let widest = row.iter().map(|&q| radius[q as usize]).fold(0.0, f32::max);
+                let widest = (row.iter()).fold(0.0, |w, &q| results[q as usize].radius.max(w));
                 *out = own + widest;
             });
         second(&output);
@@ -159,7 +158,7 @@ fn staged(
             halo_positions.clear();
             halo_positions.extend(
                 (p.chunk.rows().iter())
-                    .filter(|&&j| !stage.classified[j as usize])
+                    .filter(|&&j| !stage.results[j as usize].is_done())
                     .map(|&j| position[j as usize] as usize),
             );
             halo_positions.sort_unstable();
@@ -177,13 +176,41 @@ fn staged(
     Ok(halo_points)
 }
 
+/// A point's first-stage result, as the second stage reads it: one 16-byte entry holds all
+/// that the context and the reach read of a neighbour, so that a neighbour costs one cache
+/// line, not three (in a cloud stored in random order the neighbours lie scattered over the
+/// table). The non-edge probability is not kept: the context does not read it.
+#[derive(Debug, Clone, Copy)]
+#[repr(align(16))]
+struct Classified {
+    sharp: f32,
+    boundary: f32,
+    /// The reach of its features; negative until it is classified.
+    radius: f32,
+}
+
+impl Classified {
+    const NOT_YET: Self = Self {
+        sharp: 0.0,
+        boundary: 0.0,
+        radius: -1.0,
+    };
+
+    fn is_done(self) -> bool {
+        self.radius >= 0.0
+    }
+}
+
+impl FirstResult for Classified {
+    fn sharp_boundary(self) -> [f32; 2] {
+        [self.sharp, self.boundary]
+    }
+}
+
 /// The first stage's results so far.
 struct FirstStage<'a> {
-    /// Per cloud index; valid where `classified`.
-    probabilities: Vec<[f32; 3]>,
-    /// The reach of the features, per cloud index; valid where `classified`.
-    radius: Vec<f32>,
-    classified: Vec<bool>,
+    /// Per cloud index.
+    results: Vec<Classified>,
     /// One block's probabilities.
     block: Vec<[f32; 3]>,
     first: &'a mut dyn FnMut(&FeatureBlock, &mut [[f32; 3]]),
@@ -206,10 +233,12 @@ impl FirstStage<'_> {
         self.block.clear();
         self.block.resize(chunk.len(), [0.0; 3]);
         (self.first)(features, &mut self.block);
-        for ((&i, p), &r) in chunk.queries().iter().zip(&self.block).zip(&features.reach) {
-            self.probabilities[i as usize] = *p;
-            self.radius[i as usize] = r;
-            self.classified[i as usize] = true;
+        for ((&i, p), &radius) in chunk.queries().iter().zip(&self.block).zip(&features.reach) {
+            self.results[i as usize] = Classified {
+                sharp: p[1],
+                boundary: p[2],
+                radius,
+            };
         }
     }
 }
