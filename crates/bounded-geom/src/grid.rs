@@ -64,6 +64,8 @@ pub(crate) struct Candidates {
     /// Per group of [`GROUP`] consecutive pieces: end of its pieces, and a box around
     /// them, so that a query skips far groups without testing each piece.
     groups: Vec<(usize, Box3)>,
+    /// One past the largest sorted position among the candidates.
+    end: usize,
 }
 
 /// Points per candidate piece at most. Cells hold `k / 6` points on average, but a
@@ -209,7 +211,8 @@ impl Grid {
     }
 
     /// Writes the `out.len()` nearest neighbours of the sorted points `queries` (all in
-    /// cell `cell`) to `rows` (row-major).
+    /// cell `cell`) to `rows` (row-major). Returns one past the largest sorted position
+    /// among the cells searched: no neighbour lies at or beyond it.
     pub(crate) fn search_cell(
         &self,
         s: &Sorted<'_>,
@@ -217,10 +220,11 @@ impl Grid {
         queries: Range<usize>,
         rows: &mut [u32],
         scratch: &mut Scratch,
-    ) {
+    ) -> usize {
         let k = rows.len() / queries.len();
         let c = self.coords(s, cell);
         self.gather(s, c, &mut scratch.shared);
+        let mut end = scratch.shared.end;
         for (pos, out) in queries.zip(rows.chunks_exact_mut(k)) {
             let p = s.points[pos];
             let q = s.order[pos];
@@ -237,10 +241,12 @@ impl Grid {
                 || shared.best(p, q, exact, sel, out);
             if !answered {
                 self.by_distance(s, p, q, scratch, out);
+                end = end.max(scratch.own.end);
             }
             // Every path leaves this query's neighbours, sorted, in the selection.
             scratch.prev = Some((p, key_distance(scratch.select.sorted(k)[k - 1])));
         }
+        end
     }
 
     /// Exact fallback for isolated points: visit cells by increasing distance until
@@ -312,6 +318,7 @@ struct Node {
 
 impl Candidates {
     fn clear(&mut self) {
+        self.end = 0;
         self.xs.clear();
         self.ys.clear();
         self.zs.clear();
@@ -343,6 +350,7 @@ impl Candidates {
     /// when they are more than two pieces' worth, in pieces of [`PIECE`] points, each
     /// with its bounding box.
     fn add(&mut self, s: &Sorted<'_>, range: Range<usize>, cell: Box3) {
+        self.end = self.end.max(range.end);
         let pts = &s.points[range.clone()];
         self.xs.extend(pts.iter().map(|p| p[0]));
         self.ys.extend(pts.iter().map(|p| p[1]));

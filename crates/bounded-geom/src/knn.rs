@@ -18,6 +18,8 @@ pub struct NeighbourChunk {
     k: usize,
     queries: Vec<u32>,
     neighbours: Vec<u32>,
+    /// See [`NeighbourChunk::positions_below`].
+    positions_below: usize,
 }
 
 impl NeighbourChunk {
@@ -49,6 +51,14 @@ impl NeighbourChunk {
     /// All rows, row-major (`len() * k()` indices), e.g. for `par_chunks(k())`.
     pub fn rows(&self) -> &[u32] {
         &self.neighbours
+    }
+
+    /// A bound on the neighbours' Morton positions ([`KnnIndex::order`]): every neighbour
+    /// lies at a position below it. It comes free with the search (the end of the last cell
+    /// searched), where the largest position itself would cost a lookup of every neighbour,
+    /// scattered over the cloud; it can lie past that largest position, never before it.
+    pub fn positions_below(&self) -> usize {
+        self.positions_below
     }
 }
 
@@ -255,10 +265,12 @@ impl KnnSearch<'_> {
             rest = tail;
         }
         let sorted = index.sorted();
-        jobs.into_par_iter()
-            .for_each_init(Scratch::default, |scratch, (cell, queries, rows)| {
+        chunk.positions_below = (jobs.into_par_iter())
+            .map_init(Scratch::default, |scratch, (cell, queries, rows)| {
                 self.grid.search_cell(&sorted, cell, queries, rows, scratch)
-            });
+            })
+            .max()
+            .unwrap_or(0);
     }
 }
 
@@ -378,6 +390,34 @@ mod tests {
             })
             .unwrap();
         }
+    }
+
+    #[test]
+    fn positions_below_bounds_every_neighbour() {
+        // A plane, its dense core and outliers (the octree fallback): every neighbour's
+        // Morton position lies below the chunk's bound, and the bound within the cloud.
+        let mut r = rng(4);
+        let mut pts: Vec<[f32; 3]> = (0..1500).map(|_| [r(), r(), 0.5]).collect();
+        pts.extend((0..400).map(|_| [0.3 + 0.001 * r(), 0.3 + 0.001 * r(), 0.5]));
+        pts.extend((0..100).map(|_| [100.0 * r() - 50.0, 100.0 * r() - 50.0, 100.0 * r() - 50.0]));
+        let idx = KnnIndex::new(&cloud(pts.clone())).unwrap();
+        let mut position = vec![0; pts.len()];
+        for (pos, &i) in idx.order().iter().enumerate() {
+            position[i as usize] = pos;
+        }
+        let mut tight = 0;
+        for k in [5, 40] {
+            idx.for_each_chunk(k, 300, |ch| {
+                let furthest = ch.rows().iter().map(|&j| position[j as usize]).max();
+                let furthest = furthest.unwrap();
+                assert!(furthest < ch.positions_below(), "k {k}");
+                assert!(ch.positions_below() <= pts.len());
+                tight += usize::from(furthest + 1 == ch.positions_below());
+            })
+            .unwrap();
+        }
+        // Not a bound that says nothing: often exact.
+        assert!(tight > 0);
     }
 
     #[test]
