@@ -334,21 +334,32 @@ pub(crate) fn in_context<P: FirstResult>(
     first: &[P],
     out: &mut Vec<f32>,
 ) {
-    let per_scale = config.features_per_scale();
-    let stride = values_per_scale(config, true);
     out.resize(chunk.len() * values_per_point(config, true), 0.0);
-    out.par_chunks_mut(config.scales.len() * stride)
+    out.par_chunks_mut(values_per_point(config, true))
         .zip(plain.par_chunks(config.features_per_point()))
         .zip(chunk.rows().par_chunks(chunk.k()))
         .for_each(|((out, features), row)| {
-            for (out, features) in
-                (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale))
-            {
-                out[..per_scale].copy_from_slice(features);
-            }
-            contexts(points, row, &config.scales, first, |scale, values| {
-                let at = scale * stride + per_scale;
-                out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
-            });
+            in_context_row(points, row, config, features, first, out);
         });
+}
+
+/// One row of [`in_context`]: the `features` of the point whose neighbour list is `row`, each
+/// scale's beside its context, into `out`.
+pub(crate) fn in_context_row<P: FirstResult>(
+    points: &[[f32; 3]],
+    row: &[u32],
+    config: &FeatureConfig,
+    features: &[f32],
+    first: &[P],
+    out: &mut [f32],
+) {
+    let per_scale = config.features_per_scale();
+    let stride = values_per_scale(config, true);
+    for (out, features) in (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale)) {
+        out[..per_scale].copy_from_slice(features);
+    }
+    contexts(points, row, &config.scales, first, |scale, values| {
+        let at = scale * stride + per_scale;
+        out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
+    });
 }

@@ -21,7 +21,7 @@ use bounded_geom::{KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
 use crate::context::FirstResult;
-use crate::extract::{in_context, plain_features, radii, values_per_point, with_index};
+use crate::extract::{in_context_row, plain_features, radii, values_per_point, with_index};
 use crate::{FeatureBlock, FeatureConfig, FeatureError};
 
 /// Chunks that may wait for their second stage at once: each holds its `chunk x k0` neighbour
@@ -93,23 +93,20 @@ fn staged(
         output.points.clear();
         output.points.extend_from_slice(p.chunk.queries());
         let results = &stage.results;
-        in_context(
-            points,
-            &p.chunk,
-            config,
-            &p.features.values,
-            results,
-            &mut output.values,
-        );
-        // The context reads the first stage of every neighbour, which read its own
-        // neighbours: the point's reach plus the largest of theirs.
+        output.values.resize(p.chunk.len() * output.per_point, 0.0);
         output.reach.resize(p.chunk.len(), 0.0);
-        (output.reach.par_iter_mut())
+        (output.values.par_chunks_mut(output.per_point))
+            .zip(output.reach.par_iter_mut())
+            .zip(p.features.values.par_chunks(p.features.per_point))
             .zip(p.features.reach.par_iter())
             .zip(p.chunk.rows().par_chunks(p.chunk.k()))
-            .for_each(|((out, &own), row)| {
+            .for_each(|((((out, reach), features), &own), row)| {
+                in_context_row(points, row, config, features, results, out);
+                // The context reads the first stage of every neighbour, which read its own
+                // neighbours: the point's reach plus the largest of theirs (entries the
+                // context has just read).
                 let widest = (row.iter()).fold(0.0, |w, &q| results[q as usize].radius.max(w));
-                *out = own + widest;
+                *reach = own + widest;
             });
         second(&output);
         p
