@@ -371,15 +371,20 @@ mod tests {
     /// Consecutive queries of a cell prune candidates with the previous query's k-th
     /// distance: quantised coordinates (many exactly equal distances), stacks of
     /// duplicates and a sparse region must still give the brute-force lists.
-    #[test]
-    fn scattered_outliers_and_a_dense_core_match_brute_force() {
-        // Uneven like a real scan: a plane, a core on it far denser than the average cell
-        // (searched in pieces), and points scattered in a box a hundred times larger
-        // (each one found through the octree fallback).
-        let mut r = rng(3);
+    /// Uneven like a real scan: a plane, a core on it far denser than the average cell
+    /// (searched in pieces), and points scattered in a box a hundred times larger (each one
+    /// found through the octree fallback).
+    fn uneven(seed: u64) -> Vec<[f32; 3]> {
+        let mut r = rng(seed);
         let mut pts: Vec<[f32; 3]> = (0..1500).map(|_| [r(), r(), 0.5]).collect();
         pts.extend((0..400).map(|_| [0.3 + 0.001 * r(), 0.3 + 0.001 * r(), 0.5]));
         pts.extend((0..100).map(|_| [100.0 * r() - 50.0, 100.0 * r() - 50.0, 100.0 * r() - 50.0]));
+        pts
+    }
+
+    #[test]
+    fn scattered_outliers_and_a_dense_core_match_brute_force() {
+        let pts = uneven(3);
         let c = cloud(pts.clone());
         let idx = KnnIndex::new(&c).unwrap();
         for k in [5, 40] {
@@ -394,12 +399,9 @@ mod tests {
 
     #[test]
     fn positions_below_bounds_every_neighbour() {
-        // A plane, its dense core and outliers (the octree fallback): every neighbour's
-        // Morton position lies below the chunk's bound, and the bound within the cloud.
-        let mut r = rng(4);
-        let mut pts: Vec<[f32; 3]> = (0..1500).map(|_| [r(), r(), 0.5]).collect();
-        pts.extend((0..400).map(|_| [0.3 + 0.001 * r(), 0.3 + 0.001 * r(), 0.5]));
-        pts.extend((0..100).map(|_| [100.0 * r() - 50.0, 100.0 * r() - 50.0, 100.0 * r() - 50.0]));
+        // With the octree fallback too: every neighbour's Morton position lies below the
+        // chunk's bound, and the bound within the cloud.
+        let pts = uneven(4);
         let idx = KnnIndex::new(&cloud(pts.clone())).unwrap();
         let mut position = vec![0; pts.len()];
         for (pos, &i) in idx.order().iter().enumerate() {
