@@ -4,8 +4,8 @@
 # install it (`pip install crates/bounded-py`), then its pytest suite.
 #
 # The package is built with cargo's dev profile: after `cargo test --workspace` (which .ci/run
-# runs first) every dependency is compiled for it with the same features (see the pinned
-# features in Cargo.toml), so only PyO3 and the bindings compile; a release build of burn and
+# runs first) every dependency is compiled for it as for the workspace (see the pins in
+# Cargo.toml), so only PyO3 and the bindings compile; a release build of burn and
 # the rest would take minutes more. The tests compare with the `bounded` binary and the
 # `features` example that `cargo test --workspace` builds (built here too when missing).
 set -euo pipefail
@@ -32,12 +32,15 @@ PATH="$venv/bin:$PATH" MATURIN_PEP517_ARGS="--locked --profile dev" \
     "$here" >"$build_log" 2>&1 || { tail -n 60 "$build_log"; exit 1; }
 echo "ci.sh: package built and installed ($((SECONDS - start)) s)"
 # Only PyO3 (built for this interpreter) and the bindings may compile here: anything else
-# means this crate's features differ from the workspace's and CI compiles burn twice.
+# means this crate's dependency graph differs from the workspace's (a feature, or a crate the
+# workspace links as a normal dependency where this build has it as a build-time one) and
+# CI compiles burn twice.
 rebuilt="$(grep -oE 'Compiling [a-z0-9_-]+' "$build_log" | awk '{print $2}' |
     grep -vxE 'pyo3(-[a-z-]+)?|numpy|bounded-py' || true)"
 if [ -n "$rebuilt" ]; then
     echo "ci.sh: the package build recompiled what cargo test had built:" $rebuilt >&2
-    echo "ci.sh: pin their features in crates/bounded-py/Cargo.toml" >&2
+    echo "ci.sh: pin them in crates/bounded-py/Cargo.toml as the workspace builds them" \
+        "(features; a normal dependency where the workspace has one)" >&2
     exit 1
 fi
 

@@ -326,16 +326,17 @@ pub(crate) fn plain_features(
 
 /// The rows of `chunk` with their `plain` features (as [`plain_features`] gives them), each
 /// scale's beside its context of the `first` results, into `out` (resized), in parallel.
-pub(crate) fn in_context<P: FirstResult>(
+fn in_context(
     points: &[[f32; 3]],
     chunk: &NeighbourChunk,
     config: &FeatureConfig,
     plain: &[f32],
-    first: &[P],
+    first: &[[f32; 3]],
     out: &mut Vec<f32>,
 ) {
-    out.resize(chunk.len() * values_per_point(config, true), 0.0);
-    out.par_chunks_mut(values_per_point(config, true))
+    let per_point = values_per_point(config, true);
+    out.resize(chunk.len() * per_point, 0.0);
+    out.par_chunks_mut(per_point)
         .zip(plain.par_chunks(config.features_per_point()))
         .zip(chunk.rows().par_chunks(chunk.k()))
         .for_each(|((out, features), row)| {

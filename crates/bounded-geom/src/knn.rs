@@ -368,9 +368,6 @@ mod tests {
         );
     }
 
-    /// Consecutive queries of a cell prune candidates with the previous query's k-th
-    /// distance: quantised coordinates (many exactly equal distances), stacks of
-    /// duplicates and a sparse region must still give the brute-force lists.
     /// Uneven like a real scan: a plane, a core on it far denser than the average cell
     /// (searched in pieces), and points scattered in a box a hundred times larger (each one
     /// found through the octree fallback).
@@ -382,6 +379,9 @@ mod tests {
         pts
     }
 
+    /// Consecutive queries of a cell prune candidates with the previous query's k-th
+    /// distance: quantised coordinates (many exactly equal distances), stacks of
+    /// duplicates and a sparse region must still give the brute-force lists.
     #[test]
     fn scattered_outliers_and_a_dense_core_match_brute_force() {
         let pts = uneven(3);
