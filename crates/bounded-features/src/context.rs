@@ -18,23 +18,30 @@ pub const CONTEXT_NAMES: [&str; CONTEXT_PER_SCALE] = [
     "ctx_sharp_excess",
 ];
 
-/// What the context reads of a first classifier's result at one point.
-pub(crate) trait FirstResult: Copy + Sync {
-    /// Its sharp and boundary probabilities.
-    fn sharp_boundary(self) -> [f32; 2];
+/// What the context reads of a first classifier's results.
+pub(crate) trait FirstResults: Sync {
+    /// The position of cloud point `j` and its sharp and boundary probabilities.
+    fn read(&self, j: u32) -> ([f32; 3], [f32; 2]);
 }
 
-/// Probabilities (non-edge, sharp, boundary), as callers give them.
-impl FirstResult for [f32; 3] {
-    fn sharp_boundary(self) -> [f32; 2] {
-        [self[1], self[2]]
+/// The cloud's positions beside a first classifier's probabilities (non-edge, sharp,
+/// boundary) per point, as callers give them.
+pub(crate) struct Probabilities<'a> {
+    pub(crate) points: &'a [[f32; 3]],
+    pub(crate) first: &'a [[f32; 3]],
+}
+
+impl FirstResults for Probabilities<'_> {
+    fn read(&self, j: u32) -> ([f32; 3], [f32; 2]) {
+        let p = self.first[j as usize];
+        (self.points[j as usize], [p[1], p[2]])
     }
 }
 
 /// The context of a point's neighbourhood at every scale. `row` holds the query point first,
 /// then its neighbours by increasing distance (at least `scales[0]` of them); `scales` are
 /// neighbour counts, strictly descending, each neighbourhood a prefix of `row`;
-/// `first` holds a first classifier's result per cloud point.
+/// `first` gives each cloud point's position and first-stage result.
 /// Calls `put(scale index, values)` with, per scale:
 /// - the mean sharp and the mean boundary probability over the neighbourhood;
 /// - the distance from the query point to the sharp-probability-weighted centroid, over the
@@ -45,36 +52,33 @@ impl FirstResult for [f32; 3] {
 /// One pass over the largest neighbourhood serves every scale: the sums run from the query
 /// point outwards and are read off as each smaller prefix ends. Unit-free, so it does not
 /// change when the cloud is moved, rotated or scaled.
-pub(crate) fn contexts<P: FirstResult>(
-    points: &[[f32; 3]],
+pub(crate) fn contexts(
     row: &[u32],
     scales: &[usize],
-    first: &[P],
+    first: &impl FirstResults,
     mut put: impl FnMut(usize, [f32; CONTEXT_PER_SCALE]),
 ) {
-    let x = points[row[0] as usize];
-    let offset = |j: u32| {
-        let y = points[j as usize];
-        [0, 1, 2].map(|a| f64::from(y[a]) - f64::from(x[a]))
-    };
+    let (x, [own, _]) = first.read(row[0]);
+    let offset = |y: [f32; 3]| [0, 1, 2].map(|a| f64::from(y[a]) - f64::from(x[a]));
     let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    let own = f64::from(first[row[0] as usize].sharp_boundary()[0]);
+    let own = f64::from(own);
     let (mut sharp, mut boundary) = (0.0f64, 0.0f64);
     let mut centroid = [0.0f64; 3];
     let mut summed = 0;
     // Smallest scale first, so each prefix extends the last.
     for (scale, &k) in scales.iter().enumerate().rev() {
         for &j in &row[summed..k] {
-            let [s, b] = first[j as usize].sharp_boundary().map(f64::from);
+            let (y, sb) = first.read(j);
+            let [s, b] = sb.map(f64::from);
             sharp += s;
             boundary += b;
-            let d = offset(j);
+            let d = offset(y);
             for a in 0..3 {
                 centroid[a] += s * d[a];
             }
         }
         summed = k;
-        let radius = norm(offset(row[k - 1]));
+        let radius = norm(offset(first.read(row[k - 1]).0));
         let centroid_offset = if sharp > 1e-3 && radius > 0.0 {
             norm(centroid) / (sharp * radius)
         } else {
@@ -100,9 +104,11 @@ mod tests {
         probabilities: &[[f32; 3]],
     ) -> Vec<[f32; CONTEXT_PER_SCALE]> {
         let mut out = vec![[f32::NAN; CONTEXT_PER_SCALE]; scales.len()];
-        contexts(points, row, scales, probabilities, |s, values| {
-            out[s] = values
-        });
+        let first = Probabilities {
+            points,
+            first: probabilities,
+        };
+        contexts(row, scales, &first, |s, values| out[s] = values);
         out
     }
 

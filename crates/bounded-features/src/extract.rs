@@ -3,7 +3,7 @@
 use bounded_geom::{Distinct, GeomError, KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
-use crate::context::{CONTEXT_PER_SCALE, FirstResult, contexts};
+use crate::context::{CONTEXT_PER_SCALE, FirstResults, Probabilities, contexts};
 use crate::local::{LANES, Scratch, group_features};
 use crate::{FeatureConfig, FeatureError};
 
@@ -340,18 +340,17 @@ fn in_context(
         .zip(plain.par_chunks(config.features_per_point()))
         .zip(chunk.rows().par_chunks(chunk.k()))
         .for_each(|((out, features), row)| {
-            in_context_row(points, row, config, features, first, out);
+            in_context_row(row, config, features, &Probabilities { points, first }, out);
         });
 }
 
 /// One row of [`in_context`]: the `features` of the point whose neighbour list is `row`, each
 /// scale's beside its context, into `out`.
-pub(crate) fn in_context_row<P: FirstResult>(
-    points: &[[f32; 3]],
+pub(crate) fn in_context_row(
     row: &[u32],
     config: &FeatureConfig,
     features: &[f32],
-    first: &[P],
+    first: &impl FirstResults,
     out: &mut [f32],
 ) {
     let per_scale = config.features_per_scale();
@@ -359,7 +358,7 @@ pub(crate) fn in_context_row<P: FirstResult>(
     for (out, features) in (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale)) {
         out[..per_scale].copy_from_slice(features);
     }
-    contexts(points, row, &config.scales, first, |scale, values| {
+    contexts(row, &config.scales, first, |scale, values| {
         let at = scale * stride + per_scale;
         out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
     });

@@ -20,7 +20,7 @@ use std::collections::VecDeque;
 use bounded_geom::{KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
-use crate::context::FirstResult;
+use crate::context::FirstResults;
 use crate::extract::{in_context_row, plain_features, radii, values_per_point, with_index};
 use crate::{FeatureBlock, FeatureConfig, FeatureError};
 
@@ -101,7 +101,7 @@ fn staged(
             .zip(p.features.reach.par_iter())
             .zip(p.chunk.rows().par_chunks(p.chunk.k()))
             .for_each(|((((out, reach), features), &own), row)| {
-                in_context_row(points, row, config, features, results, out);
+                in_context_row(row, config, features, &Table(results), out);
                 // The context reads the first stage of every neighbour, which read its own
                 // neighbours: the point's reach plus the largest of theirs (entries the
                 // context has just read).
@@ -171,13 +171,15 @@ fn staged(
     Ok(halo_points)
 }
 
-/// A point's first-stage result, as the second stage reads it: one 16-byte entry holds all
-/// that the context and the reach read of a neighbour, so that a neighbour costs one cache
-/// line, not three (in a cloud stored in random order the neighbours lie scattered over the
-/// table). The non-edge probability is not kept: the context does not read it.
+/// A point's first-stage result, as the second stage reads it: one 32-byte entry holds all
+/// that the context and the reach read of a neighbour, its position included, so that a
+/// neighbour costs one cache line, not several (in a cloud stored in random order the
+/// neighbours lie scattered over the table and over the cloud). The non-edge probability is
+/// not kept: the context does not read it.
 #[derive(Debug, Clone, Copy)]
-#[repr(align(16))]
+#[repr(align(32))]
 struct Classified {
+    position: [f32; 3],
     sharp: f32,
     boundary: f32,
     /// The reach of its features; negative until it is classified.
@@ -186,6 +188,7 @@ struct Classified {
 
 impl Classified {
     const NOT_YET: Self = Self {
+        position: [0.0; 3],
         sharp: 0.0,
         boundary: 0.0,
         radius: -1.0,
@@ -196,9 +199,13 @@ impl Classified {
     }
 }
 
-impl FirstResult for Classified {
-    fn sharp_boundary(self) -> [f32; 2] {
-        [self.sharp, self.boundary]
+/// The first-stage results by cloud index.
+struct Table<'a>(&'a [Classified]);
+
+impl FirstResults for Table<'_> {
+    fn read(&self, j: u32) -> ([f32; 3], [f32; 2]) {
+        let c = self.0[j as usize];
+        (c.position, [c.sharp, c.boundary])
     }
 }
 
@@ -230,6 +237,7 @@ impl FirstStage<'_> {
         (self.first)(features, &mut self.block);
         for ((&i, p), &radius) in chunk.queries().iter().zip(&self.block).zip(&features.reach) {
             self.results[i as usize] = Classified {
+                position: points[i as usize],
                 sharp: p[1],
                 boundary: p[2],
                 radius,
