@@ -24,16 +24,19 @@ pub(crate) trait FirstResults: Sync {
     fn read(&self, j: u32) -> ([f32; 3], [f32; 2]);
 }
 
-/// The cloud's positions beside a first classifier's probabilities (non-edge, sharp,
-/// boundary) per point, as callers give them.
+/// A first classifier's probabilities (non-edge, sharp, boundary) per cloud point, as callers
+/// give them, read by position in an index's Morton order: `points` and `order` by
+/// position (as [`KnnIndex::points`](bounded_geom::KnnIndex::points) and
+/// [`KnnIndex::order`](bounded_geom::KnnIndex::order)), `first` by cloud index.
 pub(crate) struct Probabilities<'a> {
     pub(crate) points: &'a [[f32; 3]],
+    pub(crate) order: &'a [u32],
     pub(crate) first: &'a [[f32; 3]],
 }
 
 impl FirstResults for Probabilities<'_> {
     fn read(&self, j: u32) -> ([f32; 3], [f32; 2]) {
-        let p = self.first[j as usize];
+        let p = self.first[self.order[j as usize] as usize];
         (self.points[j as usize], [p[1], p[2]])
     }
 }
@@ -104,8 +107,10 @@ mod tests {
         probabilities: &[[f32; 3]],
     ) -> Vec<[f32; CONTEXT_PER_SCALE]> {
         let mut out = vec![[f32::NAN; CONTEXT_PER_SCALE]; scales.len()];
+        let order: Vec<u32> = (0..points.len() as u32).collect();
         let first = Probabilities {
             points,
+            order: &order,
             first: probabilities,
         };
         contexts(row, scales, &first, |s, values| out[s] = values);

@@ -260,45 +260,61 @@ fn extract_indexed(
     chunk_points: usize,
     f: &mut dyn FnMut(&FeatureBlock),
 ) -> Result<(), FeatureError> {
-    let points = cloud.points();
     let mut block = FeatureBlock {
         per_point: values_per_point(config, probabilities.is_some()),
         ..FeatureBlock::default()
     };
+    // The features and the context read the index's Morton-ordered copy of the points by
+    // position, where neighbours near in space are near in memory.
+    let position = positions(index, cloud.len());
+    let search = index.search(config.largest_scale())?;
+    let mut chunk = NeighbourChunk::default();
     // With context, the features go to a buffer of their own first, then beside the context.
     let mut plain = Vec::new();
-    index.for_each_chunk(config.largest_scale(), chunk_points, |chunk| {
+    let step = chunk_points.max(1);
+    for start in (0..index.len()).step_by(step) {
+        search.positions(start..(start + step).min(index.len()), &mut chunk);
+        chunk.rename(&position);
         block.points.clear();
         block.points.extend_from_slice(chunk.queries());
-        radii(points, chunk, &mut block.reach);
+        let rows = chunk.rows();
+        radii(index.points(), rows, chunk.k(), &mut block.reach);
         match probabilities {
-            Some(probabilities) => {
-                plain_features(points, chunk, config, &mut plain);
-                in_context(
-                    points,
-                    chunk,
-                    config,
-                    &plain,
-                    probabilities,
-                    &mut block.values,
-                );
+            Some(first) => {
+                plain_features(index.points(), rows, config, &mut plain);
+                let first = Probabilities {
+                    points: index.points(),
+                    order: index.order(),
+                    first,
+                };
+                in_context(&chunk, config, &plain, &first, &mut block.values);
             }
-            None => plain_features(points, chunk, config, &mut block.values),
+            None => plain_features(index.points(), rows, config, &mut block.values),
         }
         f(&block);
-    })?;
+    }
     Ok(())
 }
 
-/// The distance of every row's last (`k0`-th) neighbour from its query into `out`
-/// (resized): the rows' [reach](FeatureBlock::reach) of features.
-pub(crate) fn radii(points: &[[f32; 3]], chunk: &NeighbourChunk, out: &mut Vec<f32>) {
-    out.resize(chunk.len(), 0.0);
+/// Each indexed point's position in `index`'s Morton order, by cloud index (`u32::MAX` for
+/// points it does not hold), for a cloud of `len` points.
+pub(crate) fn positions(index: &KnnIndex, len: usize) -> Vec<u32> {
+    let mut position = vec![u32::MAX; len];
+    for (pos, &i) in index.order().iter().enumerate() {
+        position[i as usize] = pos as u32;
+    }
+    position
+}
+
+/// The distance of every row's last neighbour from its query (its first entry) into `out`
+/// (resized): the [reach](FeatureBlock::reach) of features of `rows` (row-major, `k` per
+/// row, naming `points`).
+pub(crate) fn radii(points: &[[f32; 3]], rows: &[u32], k: usize, out: &mut Vec<f32>) {
+    out.resize(rows.len() / k, 0.0);
     (out.par_iter_mut())
-        .zip(chunk.queries().par_iter())
-        .zip(chunk.rows().par_chunks(chunk.k()))
-        .for_each(|((out, &q), row)| {
-            let (p, last) = (points[q as usize], points[row[row.len() - 1] as usize]);
+        .zip(rows.par_chunks(k))
+        .for_each(|(out, row)| {
+            let (p, last) = (points[row[0] as usize], points[row[k - 1] as usize]);
             let d2: f64 = (0..3)
                 .map(|a| (f64::from(p[a]) - f64::from(last[a])).powi(2))
                 .sum();
@@ -306,18 +322,19 @@ pub(crate) fn radii(points: &[[f32; 3]], chunk: &NeighbourChunk, out: &mut Vec<f
         });
 }
 
-/// The features of every row of `chunk` into `out` (resized), in parallel.
+/// The features of every row of `rows` (row-major, `k0` per row, naming `points`) into
+/// `out` (resized), in parallel.
 pub(crate) fn plain_features(
     points: &[[f32; 3]],
-    chunk: &NeighbourChunk,
+    rows: &[u32],
     config: &FeatureConfig,
     out: &mut Vec<f32>,
 ) {
     let k0 = config.largest_scale();
     let features = config.features_per_point();
-    out.resize(chunk.len() * features, 0.0);
+    out.resize(rows.len() / k0 * features, 0.0);
     out.par_chunks_mut(features * LANES)
-        .zip(chunk.rows().par_chunks(k0 * LANES))
+        .zip(rows.par_chunks(k0 * LANES))
         .for_each_init(
             || Scratch::new(k0),
             |scratch, (out, rows)| group_features(points, rows, config, scratch, out),
@@ -327,11 +344,10 @@ pub(crate) fn plain_features(
 /// The rows of `chunk` with their `plain` features (as [`plain_features`] gives them), each
 /// scale's beside its context of the `first` results, into `out` (resized), in parallel.
 fn in_context(
-    points: &[[f32; 3]],
     chunk: &NeighbourChunk,
     config: &FeatureConfig,
     plain: &[f32],
-    first: &[[f32; 3]],
+    first: &impl FirstResults,
     out: &mut Vec<f32>,
 ) {
     let per_point = values_per_point(config, true);
@@ -339,9 +355,7 @@ fn in_context(
     out.par_chunks_mut(per_point)
         .zip(plain.par_chunks(config.features_per_point()))
         .zip(chunk.rows().par_chunks(chunk.k()))
-        .for_each(|((out, features), row)| {
-            in_context_row(row, config, features, &Probabilities { points, first }, out);
-        });
+        .for_each(|((out, features), row)| in_context_row(row, config, features, first, out));
 }
 
 /// One row of [`in_context`]: the `features` of the point whose neighbour list is `row`, each

@@ -53,6 +53,13 @@ impl NeighbourChunk {
         &self.neighbours
     }
 
+    /// Replaces every neighbour `j` in the rows by `names[j]` (the queries keep their cloud
+    /// indices), in parallel: for callers that read the points in another order, such as
+    /// their Morton positions in [`KnnIndex::points`]. Each name must be in `names`.
+    pub fn rename(&mut self, names: &[u32]) {
+        (self.neighbours.par_iter_mut()).for_each(|j| *j = names[*j as usize]);
+    }
+
     /// A bound on the neighbours' Morton positions ([`KnnIndex::order`]): every neighbour
     /// lies at a position below it. It comes free with the search (the end of the last cell
     /// searched), where the largest position itself would cost a lookup of every neighbour,
@@ -138,6 +145,13 @@ impl KnnIndex {
     /// Point indices in the Morton order used by [`for_each_chunk`](Self::for_each_chunk).
     pub fn order(&self) -> &[u32] {
         &self.order
+    }
+
+    /// The indexed points in that order: position `p` holds cloud point `order()[p]`.
+    /// Neighbours near in space are near here, where in a cloud stored in another order
+    /// they can lie anywhere: reading this copy by position misses the cache far less.
+    pub fn points(&self) -> &[[f32; 3]] {
+        &self.points
     }
 
     fn sorted(&self) -> Sorted<'_> {
@@ -420,6 +434,26 @@ mod tests {
         }
         // Not a bound that says nothing: often exact.
         assert!(tight > 0);
+    }
+
+    #[test]
+    fn renamed_rows_name_the_same_points_in_morton_order() {
+        let pts = uneven(5);
+        let idx = KnnIndex::new(&cloud(pts.clone())).unwrap();
+        let mut position = vec![0u32; pts.len()];
+        for (pos, &i) in idx.order().iter().enumerate() {
+            position[i as usize] = pos as u32;
+            assert_eq!(idx.points()[pos], pts[i as usize]);
+        }
+        idx.for_each_chunk(16, 200, |ch| {
+            let mut renamed = ch.clone();
+            renamed.rename(&position);
+            assert_eq!(renamed.queries(), ch.queries());
+            for (&r, &j) in renamed.rows().iter().zip(ch.rows()) {
+                assert_eq!(idx.order()[r as usize], j);
+            }
+        })
+        .unwrap();
     }
 
     #[test]
