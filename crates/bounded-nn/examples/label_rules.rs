@@ -5,9 +5,10 @@
 //! thresholds (a ceiling for information, never a setting). Rules whose labels the features
 //! rank well are the ones a model can be trained on.
 //!
-//! `cargo run --release -p bounded-nn --example label_rules -- [clouds] [seed] [model]`
+//! `cargo run --release -p bounded-nn --example label_rules -- [clouds] [seed] [model] [noise]`
 //! (default 12 clouds of seed 2004, the training-side free-form validation seed, with the
-//! training noise along the normal; the embedded model unless a model file is given).
+//! training noise along the normal; the embedded model unless a model file is given, `-` for
+//! the embedded one; `noise`: comma-separated levels in spacings instead of the training's).
 
 use bounded_data::synth::{LabelRule, NoiseDirection, SetConfig, SetKind, generate};
 use bounded_geom::Class;
@@ -19,10 +20,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let clouds: usize = args.next().map_or(Ok(12), |a| a.parse())?;
     let seed: u64 = args.next().map_or(Ok(2004), |a| a.parse())?;
     let detector = match args.next() {
-        Some(path) => Detector::load(path)?,
-        None => Detector::embedded()?,
+        Some(path) if path != "-" => Detector::load(path)?,
+        _ => Detector::embedded()?,
     };
-    let noise = [0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0];
+    let noise: Vec<f64> = match args.next() {
+        Some(levels) => (levels.split(','))
+            .map(str::parse)
+            .collect::<Result<_, _>>()?,
+        None => vec![0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0],
+    };
     println!("| min depth | min angle | band | sharp % | AUC | MCC argmax | best MCC (at) |");
     println!("|---|---|---|---|---|---|---|");
     for band in [0.5, 1.0] {
