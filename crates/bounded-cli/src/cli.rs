@@ -124,7 +124,7 @@ pub struct DetectArgs {
 pub struct TrainArgs {
     /// Training data: directories of labelled clouds, `abc:DIR` for ABC models (OBJ meshes
     /// beside their features YAML files), or `generated:KIND:SEED[:SHAPES]` for a synthetic
-    /// set made on the fly (free-form label rules after it: `:depth=1:angle=10:band=0.5`).
+    /// set made on the fly (free-form label rules after it: `:depth=1:angle=10:band=0.5:noise=3`).
     /// Repeat to combine.
     #[arg(long, required = true)]
     pub data: Vec<String>,

@@ -390,8 +390,9 @@ mod tests {
             ..LabelRule::default()
         };
         assert_eq!(config.label_rule, rule);
-        let config = SetConfig::from_spec("generated:freeform:4:8:angle=20").unwrap();
+        let config = SetConfig::from_spec("generated:freeform:4:8:angle=20:noise=3").unwrap();
         assert_eq!(config.label_rule.min_angle, 20.0);
+        assert_eq!(config.label_rule.min_depth_per_noise, 3.0);
         for (spec, expected) in [
             (
                 "generated:cad",
@@ -399,17 +400,21 @@ mod tests {
             ),
             (
                 "generated:cad:1:2:depth=1",
-                "label rules (depth=, angle=, band=) are for the freeform kind",
+                "label rules (depth=, angle=, band=, noise=) are for the freeform kind",
             ),
             (
                 "generated:freeform:1:2:3",
-                "\"3\" is not depth=, angle= or band= a number",
+                "\"3\" is not depth=, angle=, band= or noise= a number",
             ),
             (
                 "generated:freeform:1:2:depth=x",
-                "\"depth=x\" is not depth=, angle= or band= a number",
+                "\"depth=x\" is not depth=, angle=, band= or noise= a number",
             ),
             ("generated:freeform:1:2:band=0", "label band 0"),
+            (
+                "generated:freeform:1:2:noise=-1",
+                "label min_depth_per_noise -1",
+            ),
             (
                 "generated:cube:1",
                 "unknown set kind \"cube\" (cad, random, boundary, mixed, freeform)",

@@ -467,8 +467,9 @@ impl SetKind {
 impl SetConfig {
     /// The set of `generated:KIND:SEED[:SHAPES[:RULE...]]` (60 shapes by default), with the
     /// defaults of [`SetConfig::new`]; for the free-form kind, each `RULE` of `depth=D`,
-    /// `angle=A` or `band=B` sets that field of its [`LabelRule`] (`min_depth`, `min_angle`,
-    /// `band`), for example `generated:freeform:4:80:depth=1:band=0.5`.
+    /// `angle=A`, `band=B` or `noise=F` sets that field of its [`LabelRule`] (`min_depth`,
+    /// `min_angle`, `band`, `min_depth_per_noise`), for example
+    /// `generated:freeform:4:80:depth=1:band=0.5:noise=3`.
     pub fn from_spec(spec: &str) -> Result<SetConfig, DataError> {
         let bad = |what: &str| DataError::Generator {
             what: format!("{spec:?}: {what}"),
@@ -485,11 +486,15 @@ impl SetConfig {
         let mut config = SetConfig::new(SetKind::from_name(kind)?, seed, shapes);
         if !rules.is_empty() && config.kind != SetKind::Freeform {
             return Err(bad(
-                "label rules (depth=, angle=, band=) are for the freeform kind",
+                "label rules (depth=, angle=, band=, noise=) are for the freeform kind",
             ));
         }
         for rule in rules {
-            let not_a_rule = || bad(&format!("{rule:?} is not depth=, angle= or band= a number"));
+            let not_a_rule = || {
+                bad(&format!(
+                    "{rule:?} is not depth=, angle=, band= or noise= a number"
+                ))
+            };
             let (name, value) = rule.split_once('=').ok_or_else(not_a_rule)?;
             let value = value.parse::<f64>().map_err(|_| not_a_rule())?;
             let label = &mut config.label_rule;
@@ -497,6 +502,7 @@ impl SetConfig {
                 "depth" => &mut label.min_depth,
                 "angle" => &mut label.min_angle,
                 "band" => &mut label.band,
+                "noise" => &mut label.min_depth_per_noise,
                 _ => return Err(not_a_rule()),
             } = value;
         }

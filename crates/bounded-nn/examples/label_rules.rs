@@ -5,10 +5,11 @@
 //! thresholds (a ceiling for information, never a setting). Rules whose labels the features
 //! rank well are the ones a model can be trained on.
 //!
-//! `cargo run --release -p bounded-nn --example label_rules -- [clouds] [seed] [model] [noise]`
-//! (default 12 clouds of seed 2004, the training-side free-form validation seed, with the
-//! training noise along the normal; the embedded model unless a model file is given, `-` for
-//! the embedded one; `noise`: comma-separated levels in spacings instead of the training's).
+//! `cargo run --release -p bounded-nn --example label_rules -- [clouds] [seed] [model] [noise]
+//! [per-noise]` (default 12 clouds of seed 2004, the training-side free-form validation seed,
+//! with the training noise along the normal; the embedded model unless a model file is given,
+//! `-` for the embedded one; `noise`: comma-separated levels in spacings instead of the
+//! training's, `-` for those; `per-noise`: every rule's `min_depth_per_noise`, default 0).
 
 use bounded_data::synth::{LabelRule, NoiseDirection, SetConfig, SetKind, generate};
 use bounded_geom::Class;
@@ -24,11 +25,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         _ => Detector::embedded()?,
     };
     let noise: Vec<f64> = match args.next() {
-        Some(levels) => (levels.split(','))
+        Some(levels) if levels != "-" => (levels.split(','))
             .map(str::parse)
             .collect::<Result<_, _>>()?,
-        None => vec![0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0],
+        _ => vec![0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0],
     };
+    let min_depth_per_noise: f64 = args.next().map_or(Ok(0.0), |a| a.parse())?;
     println!("| min depth | min angle | band | sharp % | AUC | MCC argmax | best MCC (at) |");
     println!("|---|---|---|---|---|---|---|");
     for band in [0.5, 1.0] {
@@ -40,6 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     min_angle,
                     min_depth,
                     band,
+                    min_depth_per_noise,
                 };
                 config.validate()?;
                 let (mut share, mut auc, mut argmax, mut best, mut at) =

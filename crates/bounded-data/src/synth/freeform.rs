@@ -1072,7 +1072,8 @@ pub fn generate_freeform(spec: &FreeformSpec) -> Result<LabelledCloud, DataError
     let spacing = perturb::median_spacing(&points, unit);
     let kinks = relief.kink_lines();
     let border = relief.border();
-    let mut labels = relief.labels(&points, spacing, &spec.label_rule, &kinks, border.as_ref());
+    let rule = spec.label_rule.at_noise(spec.noise);
+    let mut labels = relief.labels(&points, spacing, &rule, &kinks, border.as_ref());
     let sigma = spec.noise * spacing;
     if sigma > 0.0 {
         // Scan lines: along the view ray, the mean normal of the sheet's middle.

@@ -30,8 +30,9 @@ use bounded_geom::vec3::{V3, add, cross, dot, norm, normalize, scale, sub, tange
 /// [`Class::Boundary`] within `2 band` spacings of the border of an open surface (twice as
 /// wide because a border has points on one side only, as
 /// [`W_BORDER`](super::W_BORDER) = 2 [`W_SHARP`](super::W_SHARP) in the other kinds); else
-/// non-edge. Labels do not depend on the noise (those of the clean points), nor on holes
-/// (a dropout is missing data, not a border of the object).
+/// non-edge. Labels are those of the clean points, and do not depend on holes (a dropout is
+/// missing data, not a border of the object); they depend on the noise only through
+/// `min_depth_per_noise` (off by default).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LabelRule {
     /// Smallest deviation from flat across a kink, in degrees, for it to be sharp. Default
@@ -48,6 +49,12 @@ pub struct LabelRule {
     /// narrow end of such bands, wide enough that irregular and scan-line sampling leave no
     /// gaps along a kink.
     pub band: f64,
+    /// Smallest depth or height of a feature as a multiple of the cloud's noise level (its
+    /// standard deviation, in spacings), on top of `min_depth`: a feature is sharp only when
+    /// at least `max(min_depth, min_depth_per_noise x noise)` spacings deep. Default 0 (off).
+    /// A groove a spacing deep under a spacing of range noise is not in the positions at
+    /// all (see `docs/model.md`); with this rule a model is not asked to find it.
+    pub min_depth_per_noise: f64,
 }
 
 impl Default for LabelRule {
@@ -56,12 +63,24 @@ impl Default for LabelRule {
             min_angle: 10.0,
             min_depth: 0.25,
             band: 1.0,
+            min_depth_per_noise: 0.0,
         }
     }
 }
 
 impl LabelRule {
-    /// Checks the ranges: `min_angle` in 0..180, `min_depth` 0 or more, `band` above 0.
+    /// The rule for a cloud with `noise` (standard deviation in spacings): `min_depth_per_noise`
+    /// folded into `min_depth`.
+    pub fn at_noise(&self, noise: f64) -> LabelRule {
+        LabelRule {
+            min_depth: self.min_depth.max(self.min_depth_per_noise * noise),
+            min_depth_per_noise: 0.0,
+            ..*self
+        }
+    }
+
+    /// Checks the ranges: `min_angle` in 0..180, `min_depth` and `min_depth_per_noise` 0 or
+    /// more, `band` above 0.
     pub fn validate(&self) -> Result<(), DataError> {
         let bad = |what: String| Err(DataError::Generator { what });
         if !(0.0..180.0).contains(&self.min_angle) {
@@ -74,6 +93,12 @@ impl LabelRule {
             return bad(format!(
                 "label min_depth {}: a multiple of the point spacing, 0 or more",
                 self.min_depth
+            ));
+        }
+        if !(self.min_depth_per_noise.is_finite() && self.min_depth_per_noise >= 0.0) {
+            return bad(format!(
+                "label min_depth_per_noise {}: a multiple of the noise level, 0 or more",
+                self.min_depth_per_noise
             ));
         }
         if !(self.band.is_finite() && self.band > 0.0) {
@@ -1172,6 +1197,17 @@ mod tests {
         // The columns at u - 10.3 = -0.8, 0.2 and 1.2 lie 0.3, 0.22 and 0.7 from a kink
         // line, within 1; those at -1.8 and 2.2 1.3 and 1.7.
         assert_eq!(count(&lenient), 3 * 10);
+        // Relative to the noise: 0.2 spacings deep is at least 2 x 0.05 and 2 x 0.1, not
+        // 2 x 0.15.
+        let per_noise = LabelRule {
+            min_depth_per_noise: 2.0,
+            ..lenient
+        };
+        assert_eq!(count(&per_noise.at_noise(0.0)), 3 * 10);
+        assert_eq!(count(&per_noise.at_noise(0.05)), 3 * 10);
+        assert_eq!(count(&per_noise.at_noise(0.1)), 3 * 10);
+        assert_eq!(count(&per_noise.at_noise(0.15)), 0);
+        assert_eq!(per_noise.at_noise(0.15).min_depth, 2.0 * 0.15);
     }
 
     #[test]
@@ -1240,6 +1276,13 @@ mod tests {
                     ..LabelRule::default()
                 },
                 "min_angle",
+            ),
+            (
+                LabelRule {
+                    min_depth_per_noise: -1.0,
+                    ..LabelRule::default()
+                },
+                "min_depth_per_noise",
             ),
             (
                 LabelRule {
