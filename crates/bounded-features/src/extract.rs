@@ -273,8 +273,11 @@ fn extract_indexed(
     let mut plain = Vec::new();
     let step = chunk_points.max(1);
     for start in (0..index.len()).step_by(step) {
-        search.positions(start..(start + step).min(index.len()), &mut chunk);
-        chunk.rename(&position);
+        search.positions_named(
+            start..(start + step).min(index.len()),
+            &position,
+            &mut chunk,
+        );
         block.points.clear();
         block.points.extend_from_slice(chunk.queries());
         let rows = chunk.rows();

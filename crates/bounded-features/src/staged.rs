@@ -16,7 +16,7 @@
 //! computes them, so the results are those of two passes, bit for bit.
 //!
 //! Neighbours are named by their Morton position once searched
-//! ([`NeighbourChunk::rename`]), and the features, the first-stage results and the context
+//! ([`KnnSearch::positions_named`](bounded_geom::KnnSearch::positions_named)), and the features, the first-stage results and the context
 //! are read by position from the index's Morton-ordered copy of the points: a neighbourhood
 //! then lies in a few runs of memory rather than anywhere in a cloud stored in another order
 //! (1M-point random cube, interleaved runs: both stages 9% faster, the first stage alone
@@ -139,8 +139,11 @@ fn staged(
             features: FeatureBlock::default(),
             needs: 0,
         });
-        search.positions(start..(start + step).min(index.len()), &mut p.chunk);
-        p.chunk.rename(&position);
+        search.positions_named(
+            start..(start + step).min(index.len()),
+            &position,
+            &mut p.chunk,
+        );
         stage.run(points, config, p.chunk.rows(), &mut p.features);
         // The chunk of the furthest neighbour, or one after it: the search's bound costs
         // nothing, where the furthest itself took a lookup of every neighbour (~4% of
@@ -172,8 +175,7 @@ fn staged(
             halo_positions.sort_unstable();
             halo_positions.dedup();
             halo_points += halo_positions.len();
-            search.positions(halo_positions.iter().copied(), &mut halo.chunk);
-            halo.chunk.rename(&position);
+            search.positions_named(halo_positions.iter().copied(), &position, &mut halo.chunk);
             stage.run(points, config, halo.chunk.rows(), &mut halo.features);
             spare.push(emit(p, &stage));
         }

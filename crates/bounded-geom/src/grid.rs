@@ -211,13 +211,15 @@ impl Grid {
     }
 
     /// Writes the `out.len()` nearest neighbours of the sorted points `queries` (all in
-    /// cell `cell`) to `rows` (row-major). Returns one past the largest sorted position
-    /// among the cells searched: no neighbour lies at or beyond it.
+    /// cell `cell`) to `rows` (row-major), each index `j` as `names[j]` when given.
+    /// Returns one past the largest sorted position among the cells searched: no neighbour
+    /// lies at or beyond it.
     pub(crate) fn search_cell(
         &self,
         s: &Sorted<'_>,
         cell: usize,
         queries: Range<usize>,
+        names: Option<&[u32]>,
         rows: &mut [u32],
         scratch: &mut Scratch,
     ) -> usize {
@@ -245,6 +247,10 @@ impl Grid {
             }
             // Every path leaves this query's neighbours, sorted, in the selection.
             scratch.prev = Some((p, key_distance(scratch.select.sorted(k)[k - 1])));
+            // Renamed while the row is in the cache.
+            if let Some(names) = names {
+                out.iter_mut().for_each(|j| *j = names[*j as usize]);
+            }
         }
         end
     }

@@ -53,13 +53,6 @@ impl NeighbourChunk {
         &self.neighbours
     }
 
-    /// Replaces every neighbour `j` in the rows by `names[j]` (the queries keep their cloud
-    /// indices), in parallel: for callers that read the points in another order, such as
-    /// their Morton positions in [`KnnIndex::points`]. Each name must be in `names`.
-    pub fn rename(&mut self, names: &[u32]) {
-        (self.neighbours.par_iter_mut()).for_each(|j| *j = names[*j as usize]);
-    }
-
     /// A bound on the neighbours' Morton positions ([`KnnIndex::order`]): every neighbour
     /// lies at a position below it. It comes free with the search (the end of the last cell
     /// searched), where the largest position itself would cost a lookup of every neighbour,
@@ -181,7 +174,14 @@ impl KnnIndex {
         let sorted = self.sorted();
         let grid = Grid::new(&sorted, out.len());
         let cell = grid.cell_of(pos);
-        grid.search_cell(&sorted, cell, pos..pos + 1, out, &mut Scratch::default());
+        grid.search_cell(
+            &sorted,
+            cell,
+            pos..pos + 1,
+            None,
+            out,
+            &mut Scratch::default(),
+        );
         Ok(())
     }
 
@@ -255,6 +255,29 @@ impl KnnSearch<'_> {
         positions: impl IntoIterator<Item = usize>,
         chunk: &mut NeighbourChunk,
     ) {
+        self.search(positions, None, chunk);
+    }
+
+    /// [`positions`](Self::positions) with every neighbour `j` in the rows named `names[j]`
+    /// instead (the queries keep their cloud indices): for callers that read the points in
+    /// another order, such as their Morton positions in [`KnnIndex::points`]. Each name must
+    /// be in `names`. Renaming each row as it is found costs less than a pass over the
+    /// chunk after the search (that pass reads and writes every row once more).
+    pub fn positions_named(
+        &self,
+        positions: impl IntoIterator<Item = usize>,
+        names: &[u32],
+        chunk: &mut NeighbourChunk,
+    ) {
+        self.search(positions, Some(names), chunk);
+    }
+
+    fn search(
+        &self,
+        positions: impl IntoIterator<Item = usize>,
+        names: Option<&[u32]>,
+        chunk: &mut NeighbourChunk,
+    ) {
         let index = self.index;
         let k = self.k;
         chunk.k = k;
@@ -281,7 +304,8 @@ impl KnnSearch<'_> {
         let sorted = index.sorted();
         chunk.positions_below = (jobs.into_par_iter())
             .map_init(Scratch::default, |scratch, (cell, queries, rows)| {
-                self.grid.search_cell(&sorted, cell, queries, rows, scratch)
+                self.grid
+                    .search_cell(&sorted, cell, queries, names, rows, scratch)
             })
             .max()
             .unwrap_or(0);
@@ -445,15 +469,18 @@ mod tests {
             position[i as usize] = pos as u32;
             assert_eq!(idx.points()[pos], pts[i as usize]);
         }
-        idx.for_each_chunk(16, 200, |ch| {
-            let mut renamed = ch.clone();
-            renamed.rename(&position);
-            assert_eq!(renamed.queries(), ch.queries());
-            for (&r, &j) in renamed.rows().iter().zip(ch.rows()) {
+        let search = idx.search(16).unwrap();
+        let (mut plain, mut named) = (NeighbourChunk::default(), NeighbourChunk::default());
+        for start in (0..pts.len()).step_by(200) {
+            let run = start..(start + 200).min(pts.len());
+            search.positions(run.clone(), &mut plain);
+            search.positions_named(run, &position, &mut named);
+            assert_eq!(named.queries(), plain.queries());
+            assert_eq!(named.positions_below(), plain.positions_below());
+            for (&r, &j) in named.rows().iter().zip(plain.rows()) {
                 assert_eq!(idx.order()[r as usize], j);
             }
-        })
-        .unwrap();
+        }
     }
 
     #[test]
