@@ -266,18 +266,10 @@ fn extract_indexed(
     };
     // The features and the context read the index's Morton-ordered copy of the points by
     // position, where neighbours near in space are near in memory.
-    let position = positions(index, cloud.len());
-    let search = index.search(config.largest_scale())?;
-    let mut chunk = NeighbourChunk::default();
+    let position = index.positions_by_index(cloud.len());
     // With context, the features go to a buffer of their own first, then beside the context.
     let mut plain = Vec::new();
-    let step = chunk_points.max(1);
-    for start in (0..index.len()).step_by(step) {
-        search.positions_named(
-            start..(start + step).min(index.len()),
-            &position,
-            &mut chunk,
-        );
+    index.for_each_chunk_named(config.largest_scale(), chunk_points, &position, |chunk| {
         block.points.clear();
         block.points.extend_from_slice(chunk.queries());
         let rows = chunk.rows();
@@ -290,23 +282,13 @@ fn extract_indexed(
                     order: index.order(),
                     first,
                 };
-                in_context(&chunk, config, &plain, &first, &mut block.values);
+                in_context(chunk, config, &plain, &first, &mut block.values);
             }
             None => plain_features(index.points(), rows, config, &mut block.values),
         }
         f(&block);
-    }
+    })?;
     Ok(())
-}
-
-/// Each indexed point's position in `index`'s Morton order, by cloud index (`u32::MAX` for
-/// points it does not hold), for a cloud of `len` points.
-pub(crate) fn positions(index: &KnnIndex, len: usize) -> Vec<u32> {
-    let mut position = vec![u32::MAX; len];
-    for (pos, &i) in index.order().iter().enumerate() {
-        position[i as usize] = pos as u32;
-    }
-    position
 }
 
 /// The distance of every row's last neighbour from its query (its first entry) into `out`

@@ -15,12 +15,13 @@
 //! point's neighbour list, features and probabilities are the same whichever run of points
 //! computes them, so the results are those of two passes, bit for bit.
 //!
-//! Neighbours are named by their Morton position once searched
-//! ([`KnnSearch::positions_named`](bounded_geom::KnnSearch::positions_named)), and the features, the first-stage results and the context
-//! are read by position from the index's Morton-ordered copy of the points: a neighbourhood
-//! then lies in a few runs of memory rather than anywhere in a cloud stored in another order
-//! (1M-point random cube, interleaved runs: both stages 9% faster, the first stage alone
-//! unchanged, see `docs/performance.md`).
+//! The search names neighbours by their Morton position
+//! ([`KnnSearch::positions_named`](bounded_geom::KnnSearch::positions_named)), and the
+//! features, the first-stage results and the context are read by position from the index's
+//! Morton-ordered copy of the points: a neighbourhood then lies in a few runs of memory
+//! rather than anywhere in a cloud stored in another order (1M-point random cube,
+//! interleaved runs: both stages 9% faster, the first stage alone unchanged, see
+//! `docs/performance.md`).
 
 use std::collections::VecDeque;
 
@@ -28,9 +29,7 @@ use bounded_geom::{KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
 use crate::context::FirstResults;
-use crate::extract::{
-    in_context_row, plain_features, positions, radii, values_per_point, with_index,
-};
+use crate::extract::{in_context_row, plain_features, radii, values_per_point, with_index};
 use crate::{FeatureBlock, FeatureConfig, FeatureError};
 
 /// Chunks that may wait for their second stage at once: each holds its `chunk x k0` neighbour
@@ -88,7 +87,7 @@ fn staged(
     let step = chunk_points.max(1);
     let search = index.search(config.largest_scale())?;
     // Each indexed point's Morton position, by cloud index (the chunk is position / step).
-    let position = positions(index, cloud.len());
+    let position = index.positions_by_index(cloud.len());
     let mut stage = FirstStage {
         results: vec![Classified::NOT_YET; index.len()],
         order: index.order(),

@@ -367,10 +367,7 @@ pub(crate) fn first_radius(detector: &Detector, cloud: &PointCloud) -> f64 {
     let largest = if detector.classifier().second_stage().is_none() {
         sample.iter().map(|s| s.1).fold(0.0, f64::max)
     } else {
-        let mut position = vec![0u32; points.len()];
-        for (pos, &i) in index.order().iter().enumerate() {
-            position[i as usize] = pos as u32;
-        }
+        let position = index.positions_by_index(points.len());
         let mut neighbours: Vec<usize> = (sample.iter())
             .flat_map(|s| s.2.iter().map(|&q| position[q as usize] as usize))
             .collect();
