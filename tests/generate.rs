@@ -79,3 +79,62 @@ fn bad_noise_or_no_shapes_is_refused_before_any_file() {
         assert!(!out.exists(), "{option}: {} created", out.display());
     }
 }
+
+#[test]
+fn free_form_label_rules_follow_the_kind() {
+    let root = tempfile::tempdir().unwrap();
+    let set = |name: &str, kind: &str| {
+        let out = root.path().join(name);
+        let run = bounded_paths(&[
+            &"generate",
+            &"--kind",
+            &kind,
+            &"--shapes",
+            &"1",
+            &"--seed",
+            &"5",
+            &"-o",
+            &out,
+        ]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let file = std::fs::read_dir(&out)
+            .unwrap()
+            .next()
+            .unwrap()
+            .unwrap()
+            .path();
+        load(&file, Convention::ClassProperty).unwrap()
+    };
+    let sharp = |c: &LabelledCloud| -> Vec<bool> {
+        (c.labels.iter())
+            .map(|&l| l == bounded_geom::Class::Sharp)
+            .collect()
+    };
+    let default = set("default", "freeform");
+    let deep = set("deep", "freeform:depth=2");
+    assert_eq!(
+        default.cloud, deep.cloud,
+        "a rule changes labels, not geometry"
+    );
+    let (all, kept) = (sharp(&default), sharp(&deep));
+    let count = |v: &[bool]| v.iter().filter(|&&s| s).count();
+    assert!(
+        count(&kept) < count(&all),
+        "a deeper minimum keeps fewer sharp points"
+    );
+    assert!(
+        kept.iter().zip(&all).all(|(&k, &a)| !k || a),
+        "and adds none"
+    );
+    for bad in ["cad:depth=2", "freeform:depth=-1", "freeform:width=2"] {
+        let out = root.path().join("bad");
+        let run = bounded_paths(&[&"generate", &"--kind", &bad, &"-o", &out]);
+        let err = stderr(&run);
+        assert!(!run.status.success(), "{bad}: accepted");
+        assert!(
+            err.contains("--kind") && !err.contains("panicked"),
+            "{bad}: {err}"
+        );
+        assert!(!out.exists(), "{bad}: {} created", out.display());
+    }
+}

@@ -231,7 +231,8 @@ pub enum PositiveArg {
 /// Arguments of `generate`.
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
-    /// Which kind of set.
+    /// Which kind of set: cad, random, boundary, mixed or freeform; free-form label rules
+    /// after it as for `train --data` (`freeform:depth=1:angle=10:band=1.5:noise=3`).
     #[arg(long, default_value = "mixed")]
     pub kind: String,
     /// Output directory (created).

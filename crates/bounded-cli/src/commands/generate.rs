@@ -4,14 +4,20 @@ use crate::cli::GenerateArgs;
 use crate::progress;
 use anyhow::{Context, Result};
 use bounded_data::dataset::write_generated;
-use bounded_data::synth::{SetConfig, SetKind};
+use bounded_data::synth::SetConfig;
 use std::num::NonZeroUsize;
 use std::time::Instant;
 
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let start = Instant::now();
-    let kind = SetKind::from_name(&args.kind)?;
-    let config = SetConfig::new(kind, args.seed, args.shapes.map_or(60, NonZeroUsize::get))
+    // `freeform:depth=1:band=1.5` carries label rules, parsed as `train --data` parses them.
+    let (kind, rules) = match args.kind.split_once(':') {
+        Some((kind, rules)) => (kind, format!(":{rules}")),
+        None => (args.kind.as_str(), String::new()),
+    };
+    let shapes = args.shapes.map_or(60, NonZeroUsize::get);
+    let config = SetConfig::from_spec(&format!("generated:{kind}:{}:{shapes}{rules}", args.seed))
+        .context("--kind")?
         .with_noise(args.noise.noise.as_deref(), args.noise.noise_along.into())
         .context("--noise")?;
     let bar = progress::bar("generate", config.shapes as u64, "clouds");
