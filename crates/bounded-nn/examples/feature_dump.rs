@@ -3,10 +3,10 @@
 //! `cargo run --release -p bounded-nn --example feature_dump -- KIND SEED CLOUDS OUT
 //! [depth] [per-noise] [band]`: one raw little-endian `f32` file per cloud in OUT, a header of two
 //! `u32` (rows, columns), then rows of x, y, z, class, then the default 48 features, with
-//! the training noise along the normal; for free-form sets `depth` and `per-noise` set the
-//! label rule's `min_depth`, `min_depth_per_noise` and `band`.
+//! the training noise along the normal; for free-form sets `depth`, `per-noise` and `band` set
+//! the label rule's `min_depth`, `min_depth_per_noise` and `band`.
 
-use std::io::Write;
+use std::path::Path;
 
 use bounded_data::synth::{LabelRule, NoiseDirection, SetConfig, SetKind, generate};
 use bounded_features::{FeatureConfig, extract};
@@ -42,8 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 bytes.extend(v.to_le_bytes());
             }
         }
-        let mut file = std::fs::File::create(format!("{out}/{name}.f32"))?;
-        file.write_all(&bytes)?;
+        bounded_geom::atomic::write(&Path::new(out).join(format!("{name}.f32")), &bytes)?;
     }
     Ok(())
 }
