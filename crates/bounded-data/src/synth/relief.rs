@@ -27,9 +27,9 @@ use bounded_geom::vec3::{V3, add, cross, dot, norm, normalize, scale, sub, tange
 /// A point is [`Class::Sharp`] when it lies within `band` spacings (3D distance) of a kink
 /// line whose dihedral deviation there is at least `min_angle` degrees and whose feature
 /// (a groove's depth, a ridge's or step's height) is at least `min_depth` spacings; else
-/// [`Class::Boundary`] within `2 band` spacings of the border of an open surface (twice as
-/// wide because a border has points on one side only, as
-/// [`W_BORDER`](super::W_BORDER) = 2 [`W_SHARP`](super::W_SHARP) in the other kinds); else
+/// [`Class::Boundary`] within [`W_BORDER`](super::W_BORDER) spacings of the border of an open
+/// surface, as in the other kinds, whatever `band` is: `band` sets the feature curves' convention,
+/// and boundaries keep the one convention of every generated set; else
 /// non-edge. Labels are those of the clean points, and do not depend on holes (a dropout is
 /// missing data, not a border of the object); they depend on the noise only through
 /// `min_depth_per_noise` (off by default).
@@ -683,7 +683,7 @@ impl Relief {
             .flat_map(|line| sharp_runs(line, rule.min_angle))
             .collect();
         let box_ = bounds(points.iter().copied());
-        let (sharp_r, border_r) = (rule.band * spacing, 2.0 * rule.band * spacing);
+        let (sharp_r, border_r) = (rule.band * spacing, super::W_BORDER * spacing);
         let sharp = SegmentIndex::new(&sharp_lines, sharp_r, box_);
         let border = SegmentIndex::new(border.map_or(&[], std::slice::from_ref), border_r, box_);
         points
@@ -1018,7 +1018,7 @@ mod tests {
                 let edge = p[0].min(24.0 - p[0]).min(p[1]).min(10.0 - p[1]);
                 let want = if d < band {
                     Class::Sharp
-                } else if edge < 2.0 * band {
+                } else if edge < crate::synth::W_BORDER {
                     Class::Boundary
                 } else {
                     Class::NonEdge
