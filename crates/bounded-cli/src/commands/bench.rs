@@ -11,7 +11,7 @@ use crate::progress::FitBars;
 use anyhow::{Context, Result, bail};
 use bounded_data::LabelledCloud;
 use bounded_data::peers;
-use bounded_data::picture::{Canvas, PALETTE, Series, precision_recall};
+use bounded_data::picture::{Canvas, PALETTE, Series, View, precision_recall, render_classes};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind, recipe};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
@@ -302,6 +302,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )])
     );
     report.push_str(&calibration_section(&detector, &sets)?);
+    report.push_str(&scans_section(&detector, &args.data, &args.output)?);
     let _ = writeln!(
         report,
         "\nBench wall time: {:.1} min.",
@@ -339,6 +340,25 @@ Validation clouds ({}, training noise): expected \
         rows.push((set.key, Calibration::measure(detector, &clouds)?));
     }
     out.push_str(&sensitivity_table(&rows));
+    Ok(out)
+}
+
+/// The unlabelled real scans of `data/scans`, pictured before and after detection.
+fn scans_section(detector: &Detector, data: &Path, output: &Path) -> Result<String> {
+    let mut out = String::from("\n## Real scans (no labels): before and after detection\n\n");
+    let view = View::default();
+    for name in ["room_scan1", "CSite1_red1-utm"] {
+        let cloud = bounded_data::format::read(&data.join(format!("scans/{name}.pcd")))?.cloud;
+        let before = vec![Class::NonEdge; cloud.len()];
+        let after = detector.detect(&cloud)?.classes;
+        let _ = write!(out, "{name}.pcd, {} points:", cloud.len());
+        for (side, classes) in [("before", before), ("after", after)] {
+            let file = format!("scan_{name}_{side}.png");
+            render_classes(&cloud, &classes, view, 1024, 768).save_png(&output.join(&file))?;
+            let _ = write!(out, " ![{side}]({file})");
+        }
+        out.push_str("\n\n");
+    }
     Ok(out)
 }
 
