@@ -483,21 +483,33 @@ impl SetConfig {
         let seed = seed.parse().map_err(|_| bad("bad seed"))?;
         let shapes = (shapes.parse().ok().filter(|&n: &usize| n > 0))
             .ok_or_else(|| bad("the shape count must be a whole number above 0"))?;
-        let mut config = SetConfig::new(SetKind::from_name(kind)?, seed, shapes);
-        if !rules.is_empty() && config.kind != SetKind::Freeform {
+        SetConfig::new(SetKind::from_name(kind)?, seed, shapes)
+            .with_label_rules(rules)
+            .map_err(|e| match e {
+                DataError::Generator { what } => bad(&what),
+                other => other,
+            })
+    }
+
+    /// This set with the free-form label `rules`, each `depth=D`, `angle=A`, `band=B` or
+    /// `noise=F` (see [`from_spec`](Self::from_spec)), checked; rules on another kind are
+    /// refused.
+    pub fn with_label_rules(mut self, rules: &[&str]) -> Result<SetConfig, DataError> {
+        let bad = |what: String| DataError::Generator { what };
+        if !rules.is_empty() && self.kind != SetKind::Freeform {
             return Err(bad(
-                "label rules (depth=, angle=, band=, noise=) are for the freeform kind",
+                "label rules (depth=, angle=, band=, noise=) are for the freeform kind".into(),
             ));
         }
         for rule in rules {
             let not_a_rule = || {
-                bad(&format!(
+                bad(format!(
                     "{rule:?} is not depth=, angle=, band= or noise= a number"
                 ))
             };
             let (name, value) = rule.split_once('=').ok_or_else(not_a_rule)?;
             let value = value.parse::<f64>().map_err(|_| not_a_rule())?;
-            let label = &mut config.label_rule;
+            let label = &mut self.label_rule;
             *match name {
                 "depth" => &mut label.min_depth,
                 "angle" => &mut label.min_angle,
@@ -506,8 +518,8 @@ impl SetConfig {
                 _ => return Err(not_a_rule()),
             } = value;
         }
-        config.validate().map_err(|e| bad(&e.to_string()))?;
-        Ok(config)
+        self.validate()?;
+        Ok(self)
     }
 
     /// This set with noise `levels` (when given; else its own) along `direction`, checked.

@@ -1,36 +1,24 @@
 //! Writes generated clouds with their labels and features for experiments outside Rust.
 //!
-//! `cargo run --release -p bounded-nn --example feature_dump -- KIND SEED CLOUDS OUT
-//! [depth] [per-noise] [band]`: one raw little-endian `f32` file per cloud in OUT, a header of two
-//! `u32` (rows, columns), then rows of x, y, z, class, then the default 48 features, with
-//! the training noise along the normal; for free-form sets `depth`, `per-noise` and `band` set
-//! the label rule's `min_depth`, `min_depth_per_noise` and `band`.
+//! `cargo run --release -p bounded-nn --example feature_dump -- SPEC OUT`: the set `SPEC`
+//! (as `bounded train --data` takes it, label rules included, for example
+//! `generated:freeform:4:40:depth=1:noise=3:band=2`) with the training noise, one raw
+//! little-endian `f32` file per cloud in OUT: a header of two `u32` (rows, columns), then
+//! rows of x, y, z, class, then the default 48 features.
 
 use std::path::Path;
 
-use bounded_data::synth::{LabelRule, NoiseDirection, SetConfig, SetKind, generate};
+use bounded_data::synth::recipe;
 use bounded_features::{FeatureConfig, extract};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [kind, seed, clouds, out, rest @ ..] = args.as_slice() else {
-        return Err("usage: feature_dump KIND SEED CLOUDS OUT [depth] [per-noise] [band]".into());
+    let [spec, out] = args.as_slice() else {
+        return Err("usage: feature_dump SPEC OUT".into());
     };
-    let kind = SetKind::from_name(kind)?;
-    let noise = [0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0];
-    let mut config = SetConfig::new(kind, seed.parse()?, clouds.parse()?)
-        .with_noise(Some(&noise), NoiseDirection::Normal)?;
-    let defaults = LabelRule::default();
-    config.label_rule = LabelRule {
-        min_depth: rest.first().map_or(Ok(defaults.min_depth), |a| a.parse())?,
-        min_depth_per_noise: rest.get(1).map_or(Ok(0.0), |a| a.parse())?,
-        band: rest.get(2).map_or(Ok(defaults.band), |a| a.parse())?,
-        ..defaults
-    };
-    config.validate()?;
     std::fs::create_dir_all(out)?;
     let features = FeatureConfig::default();
-    for (name, labelled) in generate(&config)? {
+    for (name, labelled) in recipe::generate(&[spec.as_str()], 1)? {
         let f = extract(&labelled.cloud, &features)?;
         let columns = 4 + f.per_point();
         let mut bytes = Vec::with_capacity(8 + 4 * columns * f.len());

@@ -11,7 +11,7 @@
 //! `-` for the embedded one; `noise`: comma-separated levels in spacings instead of the
 //! training's, `-` for those; `per-noise`: every rule's `min_depth_per_noise`, default 0).
 
-use bounded_data::synth::{LabelRule, NoiseDirection, SetConfig, SetKind, generate};
+use bounded_data::synth::{LabelRule, SetConfig, SetKind, generate, recipe};
 use bounded_geom::Class;
 use bounded_nn::Detector;
 use bounded_nn::metrics::{BinaryConfusion, median};
@@ -28,7 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(levels) if levels != "-" => (levels.split(','))
             .map(str::parse)
             .collect::<Result<_, _>>()?,
-        _ => vec![0.0, 0.0, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0],
+        _ => recipe::TRAINING_NOISE.to_vec(),
     };
     let min_depth_per_noise: f64 = args.next().map_or(Ok(0.0), |a| a.parse())?;
     println!("| min depth | min angle | band | sharp % | AUC | MCC argmax | best MCC (at) |");
@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for min_angle in [10.0, 20.0, 30.0] {
             for min_depth in [0.25, 0.5, 1.0, 2.0] {
                 let mut config = SetConfig::new(SetKind::Freeform, seed, clouds)
-                    .with_noise(Some(&noise), NoiseDirection::Normal)?;
+                    .with_noise(Some(&noise), recipe::TRAINING_NOISE_ALONG)?;
                 config.label_rule = LabelRule {
                     min_angle,
                     min_depth,

@@ -4,19 +4,18 @@ use crate::cli::GenerateArgs;
 use crate::progress;
 use anyhow::{Context, Result};
 use bounded_data::dataset::write_generated;
-use bounded_data::synth::SetConfig;
+use bounded_data::synth::{SetConfig, SetKind};
 use std::num::NonZeroUsize;
 use std::time::Instant;
 
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let start = Instant::now();
-    // `freeform:depth=1:band=1.5` carries label rules, parsed as `train --data` parses them.
-    let (kind, rules) = match args.kind.split_once(':') {
-        Some((kind, rules)) => (kind, format!(":{rules}")),
-        None => (args.kind.as_str(), String::new()),
-    };
-    let shapes = args.shapes.map_or(60, NonZeroUsize::get);
-    let config = SetConfig::from_spec(&format!("generated:{kind}:{}:{shapes}{rules}", args.seed))
+    // `freeform:depth=1:band=1.5` carries label rules, as `train --data` does.
+    let mut fields = args.kind.split(':');
+    let kind = SetKind::from_name(fields.next().unwrap_or_default()).context("--kind")?;
+    let rules: Vec<&str> = fields.collect();
+    let config = SetConfig::new(kind, args.seed, args.shapes.map_or(60, NonZeroUsize::get))
+        .with_label_rules(&rules)
         .context("--kind")?
         .with_noise(args.noise.noise.as_deref(), args.noise.noise_along.into())
         .context("--noise")?;
