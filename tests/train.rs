@@ -4,8 +4,10 @@
 
 mod common;
 
+use bounded_data::dataset::TrainingSource;
 use bounded_features::{CONTEXT_NAMES, FeatureConfig, FeatureGroups, extract, extract_in_context};
-use bounded_nn::{Classifier, ModelFile};
+use bounded_nn::calibration::{Calibration, describe};
+use bounded_nn::{Classifier, Detector, ModelFile, TrainingCloud, class_at};
 use common::{bounded_paths, stderr};
 use std::ffi::OsStr;
 use std::path::Path;
@@ -137,6 +139,105 @@ fn a_context_model_labels_with_its_second_stage() {
         assert!(stderr(&run).contains(message), "{}", stderr(&run));
         assert!(!refused.exists());
     }
+}
+
+/// The library's view of labelled clouds.
+fn training_clouds(clouds: &[(String, bounded_data::LabelledCloud)]) -> Vec<TrainingCloud<'_>> {
+    (clouds.iter())
+        .map(|(name, c)| TrainingCloud {
+            name,
+            cloud: &c.cloud,
+            labels: &c.labels,
+        })
+        .collect()
+}
+
+/// The class and the three probabilities of every point of the PLY cloud at `path`.
+fn classes_and_probabilities(path: &Path) -> (Vec<u8>, Vec<[f32; 3]>) {
+    let table = bounded_data::format::read(path).unwrap();
+    let column = |name: &str| table.property(name).expect(name).clone();
+    let class = column("scalar_class");
+    let p = ["scalar_p_nonedge", "scalar_p_sharp", "scalar_p_boundary"].map(|n| column(n));
+    (0..table.len())
+        .map(|i| {
+            (
+                class.get_f64(i) as u8,
+                p.each_ref().map(|c| c.get_f64(i) as f32),
+            )
+        })
+        .unzip()
+}
+
+#[test]
+fn calibrate_on_records_the_decision_that_detect_applies() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("calibrated.bmodel");
+    let validation = "generated:cad:2001:2";
+    let options = ["--iterations", "30", "--runs", "1", "--scales", "32,16"];
+    let run = train(
+        &model,
+        &[&options[..], &["--calibrate-on", validation]].concat(),
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let file = ModelFile::load(&model).unwrap();
+    // The decision of the highest median MCC on those clouds, measured by the library.
+    let clouds = TrainingSource::parse(validation).unwrap().load().unwrap();
+    let argmax =
+        Detector::new(Classifier::from_file(file.clone().with_sensitivity(None).unwrap()).unwrap())
+            .unwrap();
+    let chosen = Calibration::measure(&argmax, &training_clouds(&clouds)).unwrap();
+    assert_eq!(file.sensitivity, chosen.chosen_sensitivity());
+    assert!(stderr(&run).contains(&format!("deciding by {}", describe(file.sensitivity))));
+
+    // detect applies the recorded rule unless --sensitivity replaces it (`argmax` included).
+    let cloud = dir.path().join("box.ply");
+    let table = bounded_data::table::PointTable::new(common::box_cloud(2000, 4).cloud);
+    bounded_data::format::write(&cloud, &table).unwrap();
+    let eager = dir.path().join("eager.bmodel");
+    file.clone()
+        .with_sensitivity(Some(0.95))
+        .unwrap()
+        .save(&eager)
+        .unwrap();
+    for (extra, rule) in [
+        (&[][..], Some(0.95)),
+        (&["--sensitivity", "argmax"][..], None),
+        (&["--sensitivity", "0.3"][..], Some(0.3)),
+    ] {
+        let out = dir.path().join("out.ply");
+        let run = detect(&cloud, &eager, extra, &out);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let (classes, probabilities) = classes_and_probabilities(&out);
+        let expected: Vec<u8> = (probabilities.iter())
+            .map(|p| class_at(p, rule) as u8)
+            .collect();
+        assert_eq!(classes, expected, "{extra:?}");
+        if rule == Some(0.95) {
+            // Not the most probable class: the eager rule calls more points sharp.
+            let sharp = |c: &[u8]| c.iter().filter(|&&c| c == 1).count();
+            let by_argmax: Vec<u8> = (probabilities.iter())
+                .map(|p| class_at(p, None) as u8)
+                .collect();
+            assert!(
+                sharp(&classes) > sharp(&by_argmax),
+                "{} vs {}",
+                sharp(&classes),
+                sharp(&by_argmax)
+            );
+        }
+    }
+    let run = detect(
+        &cloud,
+        &eager,
+        &["--sensitivity", "most"],
+        &dir.path().join("x.ply"),
+    );
+    assert!(!run.status.success());
+    assert!(
+        stderr(&run).contains("neither a number nor `argmax`"),
+        "{}",
+        stderr(&run)
+    );
 }
 
 #[test]

@@ -158,7 +158,12 @@ pub struct TrainArgs {
     /// clouds; detection then takes about twice as long.
     #[arg(long)]
     pub context: bool,
-    /// The noise of the generated sets among `--data` (directories are used as they are).
+    /// Validation clouds, given as `--data` is and never trained on, on which the default
+    /// decision is chosen and recorded in the model (the sensitivity of the highest median
+    /// MCC, or the most probable class). Repeat to combine; without it, the most probable class.
+    #[arg(long)]
+    pub calibrate_on: Vec<String>,
+    /// The noise of the generated sets among `--data` and `--calibrate-on`.
     #[command(flatten)]
     pub noise: NoiseArgs,
 }
@@ -212,11 +217,24 @@ pub struct ModelArgs {
     #[arg(long)]
     pub fast: bool,
     /// How readily a point is called a sharp edge, strictly between 0 and 1: sharp where
-    /// p_sharp reaches 1 - SENSITIVITY (and p_boundary does not exceed it). Without it, the
-    /// most probable class. `bounded eval --sensitivity` scores a choice on labelled clouds;
-    /// the bench prints MCC against it for every evaluation set.
-    #[arg(long)]
-    pub sensitivity: Option<f32>,
+    /// p_sharp reaches 1 - SENSITIVITY (and p_boundary does not exceed it); `argmax`: the most
+    /// probable class. Without it, the model's default, chosen on validation clouds when it
+    /// was trained. `bounded eval --sensitivity` scores a choice on labelled clouds; the bench
+    /// prints MCC against it for every evaluation set.
+    #[arg(long, value_parser = decision)]
+    pub sensitivity: Option<Decision>,
+}
+
+/// A decision rule: a sensitivity, or `None` for the most probable class.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Decision(pub Option<f32>);
+
+fn decision(text: &str) -> Result<Decision, String> {
+    match text {
+        "argmax" => Ok(Decision(None)),
+        _ => (text.parse().map(|s| Decision(Some(s))))
+            .map_err(|_| format!("`{text}` is neither a number nor `argmax`")),
+    }
 }
 
 /// The positive class of binary scores.

@@ -16,15 +16,17 @@ pub fn bar(step: &str, len: u64, unit: &str) -> ProgressBar {
     bar
 }
 
-/// A spinner for a step of unknown length.
-pub fn spinner(step: &str) -> ProgressBar {
-    let bar = ProgressBar::new_spinner();
-    bar.set_prefix(step.to_string());
+/// Runs `work`, a step of unknown length, under a spinner showing `step` and `message`.
+pub fn spinning<T>(step: &str, message: &str, work: impl FnOnce() -> T) -> T {
+    let bar = ProgressBar::new_spinner().with_prefix(step.to_string());
     if let Ok(style) = ProgressStyle::with_template("{prefix:>10} {spinner} {elapsed} {msg}") {
         bar.set_style(style);
     }
+    bar.set_message(message.to_string());
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    bar
+    let out = work();
+    bar.finish_and_clear();
+    out
 }
 
 /// A progress display for the library's fit steps: a bar for features, one for training.

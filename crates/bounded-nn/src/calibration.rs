@@ -7,27 +7,42 @@ use std::fmt::Write;
 
 use bounded_geom::Class;
 
-use crate::{BinaryConfusion, Detector, N_CLASSES, NnError, Scores, TrainingCloud, class_at};
+use crate::{
+    BinaryConfusion, Classifier, Detector, ModelFile, N_CLASSES, NnError, Scores, TrainingCloud,
+    class_at,
+};
 
-/// Sensitivities at which [`sweep`] scores a detection by default: the range a user would
-/// choose from, in steps of 0.1.
-pub const SENSITIVITIES: [f32; 9] = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9];
+/// The decision rules [`Calibration`] scores and chooses from: the most probable class
+/// (`None`), then the sensitivities a user would choose from, in steps of 0.1 (see
+/// [`Detector::with_sensitivity`](crate::Detector::with_sensitivity)).
+pub const DECISIONS: [Option<f32>; 10] = [
+    None,
+    Some(0.1),
+    Some(0.2),
+    Some(0.3),
+    Some(0.4),
+    Some(0.5),
+    Some(0.6),
+    Some(0.7),
+    Some(0.8),
+    Some(0.9),
+];
 
 /// The sharp-edge confusion of one cloud's `probabilities` against its `truth` (class codes)
-/// at each of `sensitivities` (see [`Detector::with_sensitivity`](crate::Detector::with_sensitivity)),
-/// from one detection.
+/// at each of `decisions` (sensitivities; `None`, the most probable class), from one
+/// detection.
 pub fn sweep(
     probabilities: &[[f32; N_CLASSES]],
     truth: &[u8],
-    sensitivities: &[f32],
+    decisions: &[Option<f32>],
 ) -> Vec<BinaryConfusion> {
     let sharp = Class::Sharp as u8;
-    sensitivities
+    decisions
         .iter()
         .map(|&s| {
             let mut c = BinaryConfusion::default();
             for (p, &t) in probabilities.iter().zip(truth) {
-                let predicted = class_at(p, Some(s)) as u8 == sharp;
+                let predicted = class_at(p, s) as u8 == sharp;
                 match (t == sharp, predicted) {
                     (true, true) => c.tp += 1,
                     (false, true) => c.fp += 1,
@@ -141,14 +156,14 @@ impl Reliability {
 }
 
 /// A detector's probabilities over labelled clouds: reliability diagrams of `p_sharp` and
-/// `p_boundary`, and the sharp-edge confusions at every one of [`SENSITIVITIES`], per cloud.
+/// `p_boundary`, and the sharp-edge confusions at every one of [`DECISIONS`], per cloud.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
     /// `p_sharp` against the sharp labels, all clouds.
     pub sharp: Reliability,
     /// `p_boundary` against the boundary labels, all clouds.
     pub boundary: Reliability,
-    /// Per cloud, the confusion at each of [`SENSITIVITIES`].
+    /// Per cloud, the confusion at each of [`DECISIONS`].
     pub sweeps: Vec<Vec<BinaryConfusion>>,
 }
 
@@ -170,14 +185,14 @@ impl Calibration {
                 calibration.sharp.add(p[1], t == Class::Sharp as u8);
                 calibration.boundary.add(p[2], t == Class::Boundary as u8);
             }
-            (calibration.sweeps).push(sweep(&detection.probabilities, &truth, &SENSITIVITIES));
+            (calibration.sweeps).push(sweep(&detection.probabilities, &truth, &DECISIONS));
         }
         Ok(calibration)
     }
 
-    /// Median sharp-edge MCC over the clouds at each of [`SENSITIVITIES`].
+    /// Median sharp-edge MCC over the clouds at each of [`DECISIONS`].
     pub fn median_mcc(&self) -> Vec<f64> {
-        (0..SENSITIVITIES.len())
+        (0..DECISIONS.len())
             .map(|i| {
                 let at: Vec<_> = self.sweeps.iter().map(|s| s[i]).collect();
                 Scores::median(&at).map_or(0.0, |s| s.mcc)
@@ -185,22 +200,52 @@ impl Calibration {
             .collect()
     }
 
-    /// The sensitivity of the highest median MCC (the first of equals).
-    pub fn best_sensitivity(&self) -> f32 {
+    /// The decision of the highest median MCC, the first of equals, so the most probable
+    /// class unless a sensitivity beats it: what training records in a model file measured on
+    /// validation clouds (`ModelFile::sensitivity`).
+    pub fn chosen_sensitivity(&self) -> Option<f32> {
         let mcc = self.median_mcc();
         let best = (0..mcc.len()).fold(0, |b, i| if mcc[i] > mcc[b] { i } else { b });
-        SENSITIVITIES[best]
+        DECISIONS[best]
     }
 }
 
+/// A decision rule in words: "sensitivity 0.6", or "the most probable class" for `None`.
+pub fn describe(sensitivity: Option<f32>) -> String {
+    sensitivity.map_or("the most probable class".into(), |s| {
+        format!("sensitivity {s}")
+    })
+}
+
+/// `file` deciding by the rule of the highest median MCC on the labelled `validation` clouds
+/// ([`Calibration::chosen_sensitivity`]), as training records it; the file unchanged when
+/// there are none. The clouds must be the training kinds but never trained on, nor evaluated
+/// on: the choice is the model's default for every user.
+pub fn with_chosen_sensitivity(
+    file: ModelFile,
+    validation: &[TrainingCloud<'_>],
+) -> Result<ModelFile, NnError> {
+    if validation.is_empty() {
+        return Ok(file);
+    }
+    let detector = Detector::new(Classifier::from_file(file.clone())?)?.most_probable_class();
+    let chosen = Calibration::measure(&detector, validation)?.chosen_sensitivity();
+    file.with_sensitivity(chosen)
+}
+
 /// Markdown table of the median sharp MCC of each named calibration at every one of
-/// [`SENSITIVITIES`], one row each.
+/// [`DECISIONS`], one row each.
 pub fn sensitivity_table(rows: &[(&str, Calibration)]) -> String {
     let mut out = String::from("| set |");
-    for s in SENSITIVITIES {
-        let _ = write!(out, " {s} |");
+    for s in DECISIONS {
+        match s {
+            None => out.push_str(" most probable |"),
+            Some(s) => {
+                let _ = write!(out, " {s} |");
+            }
+        }
     }
-    let _ = writeln!(out, "\n|---|{}", "---|".repeat(SENSITIVITIES.len()));
+    let _ = writeln!(out, "\n|---|{}", "---|".repeat(DECISIONS.len()));
     for (name, c) in rows {
         let _ = write!(out, "| {name} |");
         for mcc in c.median_mcc() {
@@ -243,13 +288,15 @@ mod tests {
             [0.1, 0.5, 0.4],
         ];
         let truth = [1, 1, 0, 2];
-        let at = sweep(&p, &truth, &[0.35, 0.65, 0.9]);
+        let at = sweep(&p, &truth, &[Some(0.35), Some(0.65), Some(0.9), None]);
         // 0.35: threshold 0.65, only the first is sharp.
         assert_eq!((at[0].tp, at[0].fp, at[0].tn, at[0].fn_), (1, 0, 2, 1));
         // 0.65: threshold 0.35: the first, second and fourth (0.5 >= 0.4).
         assert_eq!((at[1].tp, at[1].fp, at[1].tn, at[1].fn_), (2, 1, 1, 0));
         // 0.9: threshold 0.1: all four.
         assert_eq!((at[2].tp, at[2].fp, at[2].tn, at[2].fn_), (2, 2, 0, 0));
+        // Most probable class: the first and the fourth.
+        assert_eq!((at[3].tp, at[3].fp, at[3].tn, at[3].fn_), (1, 1, 1, 1));
     }
 
     #[test]
@@ -266,24 +313,57 @@ mod tests {
             tn: 0,
             fn_: 0,
         };
-        // At the lowest sensitivity the cloud is perfect (MCC 1), above it all sharp (0).
-        let mut at = vec![all_sharp; SENSITIVITIES.len()];
-        at[0] = perfect;
+        // At the lowest sensitivity the cloud is perfect (MCC 1), elsewhere all sharp (0).
+        let mut at = vec![all_sharp; DECISIONS.len()];
+        at[1] = perfect;
         let c = Calibration {
             sharp: Reliability::new(2),
             boundary: Reliability::new(2),
             sweeps: vec![at],
         };
+        assert_eq!(c.chosen_sensitivity(), Some(0.1));
         let table = sensitivity_table(&[("a", c)]);
         let lines: Vec<&str> = table.lines().collect();
         assert_eq!(
             lines[0],
-            "| set | 0.1 | 0.2 | 0.3 | 0.4 | 0.5 | 0.6 | 0.7 | 0.8 | 0.9 |"
+            "| set | most probable | 0.1 | 0.2 | 0.3 | 0.4 | 0.5 | 0.6 | 0.7 | 0.8 | 0.9 |"
         );
-        assert_eq!(lines[1], format!("|---|{}", "---|".repeat(9)));
+        assert_eq!(lines[1], format!("|---|{}", "---|".repeat(10)));
         let zeros = " 0.000 |".repeat(8);
-        assert_eq!(lines[2], format!("| a | 1.000 |{zeros}"));
+        assert_eq!(lines[2], format!("| a | 0.000 | 1.000 |{zeros}"));
         assert_eq!(lines.len(), 3);
+    }
+
+    #[test]
+    fn the_most_probable_class_wins_ties_and_medians_decide() {
+        let perfect = BinaryConfusion {
+            tp: 1,
+            fp: 0,
+            tn: 1,
+            fn_: 0,
+        };
+        let none = BinaryConfusion {
+            tp: 0,
+            fp: 0,
+            tn: 1,
+            fn_: 1,
+        };
+        let of = |sweeps| Calibration {
+            sharp: Reliability::new(2),
+            boundary: Reliability::new(2),
+            sweeps,
+        };
+        // Every decision perfect: the most probable class is kept.
+        assert_eq!(of(vec![vec![perfect; 10]]).chosen_sensitivity(), None);
+        // Sensitivity 0.7 perfect on two clouds of three, the most probable class on one:
+        // the median picks 0.7.
+        let mut a = vec![none; 10];
+        a[7] = perfect;
+        let mut b = vec![none; 10];
+        b[0] = perfect;
+        let c = of(vec![a.clone(), a, b]);
+        assert_eq!(c.median_mcc()[7], 1.0);
+        assert_eq!(c.chosen_sensitivity(), Some(0.7));
     }
 
     #[test]

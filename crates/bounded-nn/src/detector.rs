@@ -44,8 +44,9 @@ use crate::{Classifier, N_CLASSES, NnError, argmax, default_model};
 pub struct Detector {
     classifier: Classifier,
     config: FeatureConfig,
-    /// See [`Detector::with_sensitivity`]; without it, the argmax.
-    sensitivity: Option<f32>,
+    /// The decision rule asked for ([`Detector::with_sensitivity`],
+    /// [`Detector::most_probable_class`]); without one, the model's.
+    decision: Option<Option<f32>>,
 }
 
 /// Per-point results of [`Detector::detect`].
@@ -93,7 +94,7 @@ impl Detector {
         Ok(Self {
             classifier,
             config,
-            sensitivity: None,
+            decision: None,
         })
     }
 
@@ -141,16 +142,29 @@ impl Detector {
 
     /// Labels a point sharp when its sharp probability reaches `1 - sensitivity` (and is at
     /// least its boundary probability); others get the more probable of non-edge and
-    /// boundary. Higher sensitivity, more sharp points; without it the most probable class
-    /// wins. `sensitivity` must lie strictly between 0 and 1.
+    /// boundary. Higher sensitivity, more sharp points. `sensitivity` must lie strictly
+    /// between 0 and 1. Without it (or [`most_probable_class`](Self::most_probable_class)),
+    /// the detector decides by the rule the model file records (`ModelFile::sensitivity`,
+    /// chosen on validation clouds when it was trained).
     pub fn with_sensitivity(mut self, sensitivity: f32) -> Result<Self, NnError> {
         if !(sensitivity > 0.0 && sensitivity < 1.0) {
             return Err(NnError::InvalidConfig(format!(
                 "sensitivity {sensitivity} is not strictly between 0 and 1"
             )));
         }
-        self.sensitivity = Some(sensitivity);
+        self.decision = Some(Some(sensitivity));
         Ok(self)
+    }
+
+    /// Labels every point with its most probable class, whatever the model file records.
+    pub fn most_probable_class(mut self) -> Self {
+        self.decision = Some(None);
+        self
+    }
+
+    /// The sensitivity this detector decides at (`None`: the most probable class).
+    pub fn sensitivity(&self) -> Option<f32> {
+        (self.decision).unwrap_or(self.classifier.file().sensitivity)
     }
 
     /// The networks this detector runs.
@@ -165,7 +179,7 @@ impl Detector {
 
     /// The class of a point with `probabilities`, by this detector's decision rule.
     pub fn decide(&self, probabilities: &[f32; N_CLASSES]) -> Class {
-        class_at(probabilities, self.sensitivity)
+        class_at(probabilities, self.sensitivity())
     }
 
     /// Classifies every point of `cloud`.

@@ -3,9 +3,10 @@
 //! Layout: the 8 magic bytes `BOUNDED\0`, the format version as a little-endian `u32`, then
 //! the [`ModelFile`] as MessagePack with field names (rmp-serde). The version sits outside the
 //! MessagePack body so that a file of another version is reported as such rather than as a
-//! decoding error. Version 2 added the optional second stage; a file without one is written as
-//! version 1, so builds that predate it still read it, and they refuse a two-stage file rather
-//! than run its first stage alone.
+//! decoding error. Version 2 added the optional second stage, version 3 the sensitivity chosen
+//! on validation clouds; a file is written with the oldest version that holds it, so builds
+//! that predate a field still read files without it, and refuse files with it rather than
+//! run a two-stage model's first stage alone or decide by another rule.
 
 use std::path::Path;
 
@@ -19,9 +20,9 @@ use crate::{
 /// First bytes of every model file.
 pub const MAGIC: [u8; 8] = *b"BOUNDED\0";
 
-/// The newest format version, which this build writes for two-stage models; it reads every
-/// version from 1.
-pub const FORMAT_VERSION: u32 = 2;
+/// The newest format version, which this build writes for models with a recorded
+/// sensitivity; it reads every version from 1.
+pub const FORMAT_VERSION: u32 = 3;
 
 /// The largest magnitude of a weight, bias, mean or standard deviation a valid file holds.
 /// Trained weights are of order 1 (the inputs are standardised) and the features are ratios
@@ -75,6 +76,13 @@ pub struct ModelFile {
     /// `CONTEXT_NAMES`); its scales are this one's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub second_stage: Option<Box<ModelFile>>,
+    /// The decision rule of the model's output, chosen on validation clouds when it was
+    /// trained ([`crate::calibration::Calibration::chosen_sensitivity`]): the sensitivity a
+    /// [`crate::Detector`] applies unless told otherwise; `None`, the most probable class.
+    /// It belongs to the whole model: a first stage run alone decides by the most probable
+    /// class.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensitivity: Option<f32>,
 }
 
 impl ModelFile {
@@ -104,6 +112,7 @@ impl ModelFile {
             },
             layers: trained.model.export_weights()?,
             second_stage: None,
+            sensitivity: None,
         };
         file.validate()?;
         Ok(file)
@@ -119,12 +128,25 @@ impl ModelFile {
         Ok(file)
     }
 
-    /// The first network alone (the whole model when it has one stage).
+    /// The first network alone (the whole model when it has one stage), deciding by the most
+    /// probable class unless it is the whole model.
     pub fn first_stage(&self) -> Self {
+        let sensitivity = self.sensitivity.filter(|_| self.second_stage.is_none());
         Self {
             second_stage: None,
+            sensitivity,
             ..self.clone()
         }
+    }
+
+    /// This model deciding at `sensitivity` (`None`: the most probable class).
+    pub fn with_sensitivity(self, sensitivity: Option<f32>) -> Result<Self, NnError> {
+        let file = Self {
+            sensitivity,
+            ..self
+        };
+        file.validate()?;
+        Ok(file)
     }
 
     /// Whether `other` holds the same model (weights, standardisation, configuration and
@@ -142,7 +164,13 @@ impl ModelFile {
 
     /// The format version this file is written with: the oldest that holds it.
     pub fn format_version(&self) -> u32 {
-        if self.second_stage.is_some() { 2 } else { 1 }
+        if self.sensitivity.is_some() {
+            3
+        } else if self.second_stage.is_some() {
+            2
+        } else {
+            1
+        }
     }
 
     /// Checks that every stored size agrees with the configuration and that all numbers are
@@ -187,10 +215,13 @@ impl ModelFile {
                  constant inputs)"
             ));
         }
+        if let Some(s) = self.sensitivity.filter(|s| !(*s > 0.0 && *s < 1.0)) {
+            return bad(format!("sensitivity {s} is not strictly between 0 and 1"));
+        }
         if let Some(second) = &self.second_stage {
             second.validate()?;
-            if second.second_stage.is_some() {
-                return bad("a second stage with a stage of its own".into());
+            if second.second_stage.is_some() || second.sensitivity.is_some() {
+                return bad("a second stage with a stage or a sensitivity of its own".into());
             }
             if second.scales != self.scales || second.class_names != self.class_names {
                 return bad("a second stage with other scales or classes".into());
@@ -242,8 +273,13 @@ impl ModelFile {
         }
         let file: Self = rmp_serde::from_slice(body)?;
         if file.format_version() > found {
+            let what = if found < 2 && file.second_stage.is_some() {
+                "a second stage"
+            } else {
+                "a sensitivity"
+            };
             return Err(NnError::InconsistentModel(format!(
-                "a second stage in a version {found} file"
+                "{what} in a version {found} file"
             )));
         }
         file.validate()?;
@@ -301,6 +337,7 @@ pub(crate) mod tests {
             layers,
             model,
             second_stage: None,
+            sensitivity: None,
         }
     }
 
@@ -332,6 +369,34 @@ pub(crate) mod tests {
         // A single stage stays version 1, which older builds read.
         let bytes = random_file(4, 12, 3).to_bytes().unwrap();
         assert_eq!(&bytes[8..12], &1u32.to_le_bytes());
+    }
+
+    #[test]
+    fn a_sensitivity_round_trips_as_version_3_and_older_labels_are_refused() {
+        let file = two_stage_file(2, 6, 3).with_sensitivity(Some(0.6)).unwrap();
+        let mut bytes = file.to_bytes().unwrap();
+        assert_eq!(&bytes[8..12], &3u32.to_le_bytes());
+        assert_eq!(ModelFile::from_bytes(&bytes).unwrap(), file);
+        // A version 2 build would decide by the most probable class instead.
+        bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
+        let e = ModelFile::from_bytes(&bytes).unwrap_err();
+        assert!(
+            e.to_string().contains("a sensitivity in a version 2 file"),
+            "{e}"
+        );
+        // It is the whole model's: the first stage alone decides by the most probable class,
+        // and a one-stage model keeps it.
+        assert_eq!(file.first_stage().sensitivity, None);
+        let single = random_file(2, 6, 3).with_sensitivity(Some(0.3)).unwrap();
+        assert_eq!(single.first_stage().sensitivity, Some(0.3));
+        for bad in [0.0, 1.0, -0.5, f32::NAN] {
+            let e = file.clone().with_sensitivity(Some(bad)).unwrap_err();
+            assert!(e.to_string().contains("strictly between 0 and 1"), "{e}");
+        }
+        // Nor may the second stage carry one of its own.
+        let mut nested = file.clone();
+        nested.second_stage.as_mut().unwrap().sensitivity = Some(0.5);
+        assert!(nested.validate().is_err());
     }
 
     #[test]

@@ -116,6 +116,20 @@ impl Default for Widths {
 }
 
 impl Widths {
+    /// SPEC.md's network and two wider ones: the bench's width ablation (measured: wider
+    /// helps every set a little, the noise gap hardly).
+    pub fn ablations() -> [Widths; 3] {
+        let widths = |fusion: [usize; 2], hidden: [usize; 2]| Widths {
+            fusion: fusion.to_vec(),
+            hidden: hidden.to_vec(),
+        };
+        [
+            Widths::default(),
+            widths([16, 24], [24, 24]),
+            widths([24, 32], [48, 48]),
+        ]
+    }
+
     /// The network for `config`'s features, `in_context` of a first stage or not, with these
     /// widths.
     pub fn model(&self, config: &FeatureConfig, in_context: bool) -> ModelConfig {

@@ -45,6 +45,13 @@ pub struct MethodResults {
 }
 
 impl MethodResults {
+    /// (recall, precision) of every model, for a precision-recall plot.
+    pub fn recall_precision(&self) -> Vec<(f64, f64)> {
+        (self.models.iter())
+            .map(|(_, c)| (c.recall(), c.precision()))
+            .collect()
+    }
+
     /// `results` as the method `name`, with `positive` the positive class.
     pub fn of(name: &str, results: &[ModelResult], positive: Class) -> Self {
         Self {
@@ -266,9 +273,31 @@ pub fn confusion_table(results: &[ModelResult]) -> String {
     out
 }
 
+/// `n` with thousands separators (1,045,348), for summaries.
+pub fn grouped(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn thousands_are_separated() {
+        assert_eq!(grouped(0), "0");
+        assert_eq!(grouped(999), "999");
+        assert_eq!(grouped(1000), "1,000");
+        assert_eq!(grouped(522_674), "522,674");
+        assert_eq!(grouped(1_045_348), "1,045,348");
+    }
 
     fn confusion(tp: u64, fp: u64, tn: u64, fn_: u64) -> BinaryConfusion {
         BinaryConfusion { tp, fp, tn, fn_ }

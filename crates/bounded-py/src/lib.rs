@@ -18,7 +18,7 @@ mod survey;
 use bounded_features::{DEFAULT_SCALES, FeatureConfig, FeatureGroups, extract};
 use bounded_geom::Class;
 use convert::Xyz;
-use model::{Detection, Model};
+use model::{Detection, Model, Sensitivity};
 use numpy::{PyArray1, PyArrayMethods};
 use progress::Progress;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -56,8 +56,8 @@ fn on_threads<T: Send>(threads: Option<usize>, work: impl FnOnce() -> T + Send) 
 /// ``model`` is a ``Model`` or the path of a model file (default: the embedded model);
 /// ``scales`` replaces the model's neighbourhood sizes (as many, largest first); ``fast`` runs
 /// a two-stage model's first stage alone (about half the time); ``sensitivity`` in (0, 1)
-/// labels a point sharp when its sharp probability reaches ``1 - sensitivity`` (default: the
-/// most probable class). ``threads`` limits the worker threads (default: every core).
+/// labels a point sharp when its sharp probability reaches ``1 - sensitivity``, ``"argmax"``
+/// gives it the most probable class (default: the model's ``sensitivity``). ``threads`` limits the worker threads (default: every core).
 /// ``progress`` is ``True`` for a percentage on ``sys.stderr``, or a callable called as
 /// ``progress(points_done, points)``.
 ///
@@ -76,7 +76,7 @@ fn detect(
     xyz: &Bound<'_, PyAny>,
     model: Option<ModelArg<'_>>,
     scales: Option<Vec<usize>>,
-    sensitivity: Option<f32>,
+    sensitivity: Option<Sensitivity>,
     fast: bool,
     threads: Option<usize>,
     progress: Option<&Bound<'_, PyAny>>,

@@ -5,6 +5,7 @@ use crate::errors;
 use bounded_geom::Class;
 use bounded_nn::{Classifier, Detector};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -59,6 +60,14 @@ impl Model {
         self.detector.classifier().file().feature_names.clone()
     }
 
+    /// The decision the model records, chosen on validation clouds when it was trained: a
+    /// sensitivity, or ``None`` for the most probable class. ``detect`` applies it unless
+    /// given a ``sensitivity``.
+    #[getter]
+    fn sensitivity(&self) -> Option<f32> {
+        self.detector.classifier().file().sensitivity
+    }
+
     /// The number of networks run one after the other: 1, or 2 for an auto-context model.
     #[getter]
     fn stages(&self) -> usize {
@@ -75,13 +84,22 @@ impl Model {
     }
 }
 
+/// ``sensitivity`` as Python passes it: a number strictly between 0 and 1, or ``"argmax"``.
+#[derive(FromPyObject)]
+pub enum Sensitivity {
+    /// A sensitivity.
+    Value(f32),
+    /// A named rule: only ``"argmax"``, the most probable class.
+    Name(String),
+}
+
 impl Model {
     /// A detector of this model with the options of one `detect` call.
     pub fn detector(
         &self,
         scales: Option<&[usize]>,
         fast: bool,
-        sensitivity: Option<f32>,
+        sensitivity: Option<Sensitivity>,
     ) -> PyResult<Detector> {
         let file = self.detector.classifier().file().clone();
         let mut detector = Classifier::from_file(file)
@@ -93,12 +111,16 @@ impl Model {
         if fast {
             detector = detector.first_stage_only().map_err(errors::value)?;
         }
-        if let Some(sensitivity) = sensitivity {
-            detector = detector
-                .with_sensitivity(sensitivity)
-                .map_err(errors::value)?;
-        }
-        Ok(detector)
+        Ok(match sensitivity {
+            Some(Sensitivity::Value(s)) => detector.with_sensitivity(s).map_err(errors::value)?,
+            Some(Sensitivity::Name(name)) if name == "argmax" => detector.most_probable_class(),
+            Some(Sensitivity::Name(name)) => {
+                return Err(PyValueError::new_err(format!(
+                    "sensitivity {name:?} is neither a number nor 'argmax'"
+                )));
+            }
+            None => detector,
+        })
     }
 }
 

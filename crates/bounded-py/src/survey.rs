@@ -3,7 +3,7 @@
 //! proof and the writing are `bounded-survey`'s.
 
 use crate::errors;
-use crate::model::Model;
+use crate::model::{Model, Sensitivity};
 use bounded_survey::{Input, Options, Plan, ReadOptions, SurveyError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -63,7 +63,7 @@ pub fn detect_tile<'py>(
     output: PathBuf,
     model: Option<PathBuf>,
     scales: Option<Vec<usize>>,
-    sensitivity: Option<f32>,
+    sensitivity: Option<Sensitivity>,
     fast: bool,
     drop_non_finite: bool,
     radius: Option<f64>,

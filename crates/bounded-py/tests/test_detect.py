@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bounded
-from conftest import REPO, cli_detect
+from conftest import REPO, cli_detect, run_cli
 
 DEFAULT_MODEL = REPO / "crates" / "bounded-nn" / "models" / "default.bmodel"
 
@@ -23,6 +23,7 @@ def assert_same(result, classes, probabilities):
         (("--fast",), {"fast": True}),
         (("--scales", "64,32,16,8"), {"scales": [64, 32, 16, 8]}),
         (("--sensitivity", "0.8"), {"sensitivity": 0.8}),
+        (("--sensitivity", "argmax"), {"sensitivity": "argmax"}),
     ],
 )
 def test_detect_equals_the_cli_on_a_generated_float_cloud(
@@ -162,6 +163,7 @@ def test_too_few_points_says_how_many(box):
         ({"scales": [16, 32, 64, 128]}, "strictly descending"),
         ({"sensitivity": 1.5}, "sensitivity 1.5 is not strictly between 0 and 1"),
         ({"sensitivity": 0.0}, "sensitivity 0 is not strictly between 0 and 1"),
+        ({"sensitivity": "most"}, "sensitivity \"most\" is neither a number nor 'argmax'"),
         ({"threads": 0}, "threads must be at least 1"),
     ],
 )
@@ -177,11 +179,36 @@ def test_sensitivity_follows_the_documented_rule(box):
     for s in (0.2, 0.6, 0.9):
         result = bounded.detect(box, sensitivity=s)
         np.testing.assert_array_equal(result.probabilities, p)
-        threshold = np.float32(1) - np.float32(s)  # as the library computes it, in float32
-        sharp = (p[:, 1] >= threshold) & (p[:, 1] >= p[:, 2])
-        expected = np.where(sharp, 1, np.where(p[:, 2] > p[:, 0], 2, 0))
-        np.testing.assert_array_equal(result.classes, expected)
+        np.testing.assert_array_equal(result.classes, sensitivity_rule(p, s))
     assert (bounded.detect(box, sensitivity=0.9).classes == 1).sum() > (plain.classes == 1).sum()
+
+
+def sensitivity_rule(p, s):
+    """The documented rule: sharp where p_sharp reaches 1 - s (and p_boundary); else the more
+    probable of non-edge and boundary; s None: the most probable class."""
+    if s is None:
+        return p.argmax(axis=1)
+    threshold = np.float32(1) - np.float32(s)  # as the library computes it, in float32
+    sharp = (p[:, 1] >= threshold) & (p[:, 1] >= p[:, 2])
+    return np.where(sharp, 1, np.where(p[:, 2] > p[:, 0], 2, 0))
+
+
+def test_a_model_decides_by_the_rule_it_records(bounded_bin, box, tmp_path):
+    model = tmp_path / "calibrated.bmodel"
+    done = run_cli(
+        bounded_bin, "train", "--data", "generated:cad:1:2", "--calibrate-on",
+        "generated:cad:2001:2", "--iterations", "30", "--runs", "1", "--scales", "32,16",
+        "-o", model,
+    )
+    loaded = bounded.Model.load(model)
+    chosen = loaded.sensitivity
+    assert chosen is None or 0 < chosen < 1
+    words = "the most probable class" if chosen is None else f"sensitivity {chosen:g}"
+    assert f"deciding by {words}" in done.stderr
+    result = bounded.detect(box, model=loaded)
+    np.testing.assert_array_equal(result.classes, sensitivity_rule(result.probabilities, chosen))
+    argmax = bounded.detect(box, model=loaded, sensitivity="argmax")
+    np.testing.assert_array_equal(argmax.classes, result.probabilities.argmax(axis=1))
 
 
 def test_threads_do_not_change_the_result(box):
@@ -199,6 +226,7 @@ def test_models_embedded_loaded_or_by_path(box):
     reference = bounded.detect(box)
     loaded = bounded.Model.load(DEFAULT_MODEL)
     assert loaded.scales == embedded.scales and loaded.stages == 2
+    assert loaded.sensitivity == embedded.sensitivity
     for model in (embedded, loaded, str(DEFAULT_MODEL), pathlib.Path(DEFAULT_MODEL)):
         result = bounded.detect(box, model=model)
         np.testing.assert_array_equal(result.probabilities, reference.probabilities)

@@ -2,7 +2,7 @@
 //! (tile by tile, each with the halo that makes its labels the whole survey's; or each on its
 //! own with `--separate`).
 
-use super::{grouped, peak_memory, rate};
+use super::{peak_memory, rate};
 use crate::cli::DetectArgs;
 use crate::pipeline;
 use crate::progress;
@@ -12,6 +12,7 @@ use bounded_data::annotate::AnnotateOptions;
 use bounded_data::format::{self, Format};
 use bounded_geom::GeomError;
 use bounded_nn::Detector;
+use bounded_nn::report::grouped;
 use bounded_survey::{Event, Options, Plan, ReadOptions, SurveyError, TileReport};
 use std::path::{Path, PathBuf};
 use std::time::Instant;

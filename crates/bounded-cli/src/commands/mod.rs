@@ -89,19 +89,6 @@ fn peak_memory() -> Option<String> {
     Some(format!("{:.0} MiB", kib / 1024.0))
 }
 
-/// `n` with thousands separators (1,045,348), for summaries.
-fn grouped(n: usize) -> String {
-    let digits = n.to_string();
-    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
-    for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
-
 /// Points per second, for summaries.
 fn rate(points: usize, seconds: f64) -> String {
     let per_second = points as f64 / seconds.max(1e-9);
@@ -109,19 +96,5 @@ fn rate(points: usize, seconds: f64) -> String {
         format!("{:.2} M points/s", per_second / 1e6)
     } else {
         format!("{:.0} k points/s", per_second / 1e3)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::grouped;
-
-    #[test]
-    fn thousands_are_separated() {
-        assert_eq!(grouped(0), "0");
-        assert_eq!(grouped(999), "999");
-        assert_eq!(grouped(1000), "1,000");
-        assert_eq!(grouped(522_674), "522,674");
-        assert_eq!(grouped(1_045_348), "1,045,348");
     }
 }

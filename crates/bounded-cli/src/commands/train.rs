@@ -7,6 +7,7 @@ use anyhow::{Context, Result, bail};
 use bounded_data::dataset::TrainingSource;
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
+use bounded_nn::calibration::{describe, with_chosen_sensitivity};
 use bounded_nn::{Schedule, Widths, fit_stages};
 use std::time::Instant;
 
@@ -44,23 +45,23 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     // A bad generated set or noise option fails now too.
     let noise = &args.noise;
     let (levels, along) = (noise.noise.as_deref(), noise.noise_along.into());
-    let with_noise =
-        |spec: &String| (TrainingSource::parse(spec)?.with_noise(levels, along)).context("--noise");
-    let sources = (args.data.iter())
-        .map(with_noise)
-        .collect::<Result<Vec<_>>>()?;
+    let with_noise = |spec: &&String| {
+        (TrainingSource::parse(spec)?.with_noise(levels, along)).context("--noise")
+    };
+    let specs: Vec<_> = args.data.iter().chain(&args.calibrate_on).collect();
+    let sources = specs.iter().map(with_noise).collect::<Result<Vec<_>>>()?;
     let generated = (sources.iter()).any(|s| matches!(s, TrainingSource::Generated(_)));
     if !generated && (noise.noise.is_some() || noise.noise_along != NoiseAlong::Any) {
-        bail!("--noise and --noise-along apply to generated sets, and --data names none");
+        bail!("--noise and --noise-along apply to generated sets, and none is given");
     }
     let mut clouds = Vec::new();
-    for (source, spec) in sources.iter().zip(&args.data) {
-        let loading = progress::spinner("load");
-        loading.set_message(spec.clone());
-        let loaded = source.load();
-        loading.finish_and_clear();
-        clouds.extend(loaded?);
+    for (source, spec) in sources.iter().zip(specs) {
+        clouds.push(progress::spinning("load", spec, || source.load())?);
     }
+    let validation: Vec<_> = (clouds.split_off(args.data.len()).into_iter())
+        .flatten()
+        .collect();
+    let clouds: Vec<_> = clouds.into_iter().flatten().collect();
     let labels: Vec<Class> = clouds.iter().flat_map(|c| c.1.labels.clone()).collect();
     let [_, sharp, boundary] = Class::counts(&labels);
     let schedule = Schedule {
@@ -81,10 +82,14 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             progress,
         )
     })?;
+    let validation = training_clouds(&validation);
+    let file = progress::spinning("calibrate", "", || {
+        with_chosen_sensitivity(file, &validation)
+    })?;
     file.save(&args.output)?;
     eprintln!(
         "{} clouds, {} points ({} sharp, {} boundary): features {:.1} s, \
-         total {:.1} s, best validation loss {:.4}; wrote {}",
+         total {:.1} s, best validation loss {:.4}, deciding by {}; wrote {}",
         clouds.len(),
         labels.len(),
         sharp,
@@ -92,6 +97,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         seconds.features,
         start.elapsed().as_secs_f64(),
         file.provenance.val_loss,
+        describe(file.sensitivity),
         args.output.display()
     );
     Ok(())

@@ -53,6 +53,16 @@ pub enum NoiseDirection {
     Normal,
 }
 
+impl NoiseDirection {
+    /// What the noise moves along, in words ("the normal", "every coordinate").
+    pub fn phrase(self) -> &'static str {
+        match self {
+            NoiseDirection::Normal => "the normal",
+            NoiseDirection::Isotropic => "every coordinate",
+        }
+    }
+}
+
 /// Adds Gaussian noise of standard deviation `sigma` along each point's normal on `mesh`
 /// (the points lie on it).
 pub(crate) fn add_normal_noise(mesh: &Mesh, points: &mut [V3], sigma: f64, rng: &mut impl Rng) {

@@ -46,6 +46,10 @@ class Model:
     def feature_names(self) -> list[str]:
         """The names of the features of one scale."""
     @property
+    def sensitivity(self) -> float | None:
+        """The decision the model records (chosen on validation clouds when it was trained):
+        a sensitivity, or None for the most probable class."""
+    @property
     def stages(self) -> int:
         """1, or 2 for an auto-context model."""
 
@@ -69,7 +73,7 @@ def detect(
     *,
     model: Union[Model, _Path, None] = None,
     scales: Sequence[int] | None = None,
-    sensitivity: float | None = None,
+    sensitivity: float | Literal["argmax"] | None = None,
     fast: bool = False,
     threads: int | None = None,
     progress: Union[bool, Callable[[int, int], object], None] = None,
@@ -85,7 +89,8 @@ def detect(
     ``scales``: replaces the model's neighbourhood sizes (as many, largest first).
     ``fast``: runs a two-stage model's first stage alone (about half the time).
     ``sensitivity`` in (0, 1): a point is sharp when its sharp probability reaches
-    ``1 - sensitivity`` (default: the most probable class wins).
+    ``1 - sensitivity``; ``"argmax"``: the most probable class wins (default: the model's
+    ``sensitivity``, chosen on validation clouds when it was trained).
     ``threads``: limits the worker threads (default: every core).
     ``progress``: ``True`` for a percentage on ``sys.stderr``, or a callable called as
     ``progress(points_done, points)``; its exception is raised when the detection ends.
@@ -142,7 +147,7 @@ def detect_tile(
     *,
     model: _Path | None = None,
     scales: Sequence[int] | None = None,
-    sensitivity: float | None = None,
+    sensitivity: float | Literal["argmax"] | None = None,
     fast: bool = False,
     drop_non_finite: bool = False,
     radius: float | None = None,
