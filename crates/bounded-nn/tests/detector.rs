@@ -3,7 +3,7 @@
 
 use bounded_features::{extract, extract_in_context};
 use bounded_geom::{Class, PointCloud, uniform_stream};
-use bounded_nn::{Classifier, Detector, N_CLASSES, argmax, default_model};
+use bounded_nn::{Classifier, Detector, N_CLASSES, argmax, class_at, default_model};
 use std::path::Path;
 
 /// The embedded model's probabilities by two full passes.
@@ -25,14 +25,17 @@ fn two_passes(cloud: &PointCloud) -> Vec<[f32; N_CLASSES]> {
 
 fn assert_identical(cloud: &PointCloud, what: &str) {
     let reference = two_passes(cloud);
-    let detection = Detector::embedded().unwrap().detect(cloud).unwrap();
+    let detector = Detector::embedded().unwrap();
+    let detection = detector.detect(cloud).unwrap();
     let bits = |p: &[[f32; 3]]| -> Vec<u32> { p.iter().flatten().map(|v| v.to_bits()).collect() };
     assert!(
         bits(&detection.probabilities) == bits(&reference),
         "{what}: probabilities differ from two passes"
     );
+    // The classes by the model's recorded decision.
+    let sensitivity = default_model().unwrap().file().sensitivity;
     for (p, c) in reference.iter().zip(&detection.classes) {
-        assert_eq!(Class::from_code(argmax(p)), Some(*c));
+        assert_eq!(class_at(p, sensitivity), *c);
     }
 }
 
@@ -86,6 +89,7 @@ fn the_first_stage_alone_and_the_sensitivity() {
     let mut expected = vec![[0.0; N_CLASSES]; cloud.len()];
     first.predict(plain.as_slice(), &mut expected).unwrap();
     assert_eq!(fast.detect(&cloud).unwrap().probabilities, expected);
+    assert_eq!(fast.sensitivity(), None);
     // A one-stage model has no first stage to run alone.
     assert!(fast.first_stage_only().is_err());
     // More sensitivity, more sharp points, never fewer; the probabilities stay.
@@ -104,6 +108,13 @@ fn the_first_stage_alone_and_the_sensitivity() {
         last = sharp;
     }
     assert!(last > reference.class_counts()[Class::Sharp as usize]);
+    // The embedded model decides by its recorded rule (its first stage alone by the most
+    // probable class, as above), `most_probable_class` by the most probable class.
+    assert_eq!(full.sensitivity(), first.file().sensitivity);
+    let argmax_classes = full.most_probable_class().detect(&cloud).unwrap().classes;
+    for (p, c) in reference.probabilities.iter().zip(&argmax_classes) {
+        assert_eq!(Class::from_code(argmax(p)), Some(*c));
+    }
     for bad in [0.0, 1.0, -0.5, f32::NAN] {
         assert!(Detector::embedded().unwrap().with_sensitivity(bad).is_err());
     }
