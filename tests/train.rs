@@ -141,23 +141,12 @@ fn a_context_model_labels_with_its_second_stage() {
     }
 }
 
-/// The library's view of labelled clouds.
-fn training_clouds(clouds: &[(String, bounded_data::LabelledCloud)]) -> Vec<TrainingCloud<'_>> {
-    (clouds.iter())
-        .map(|(name, c)| TrainingCloud {
-            name,
-            cloud: &c.cloud,
-            labels: &c.labels,
-        })
-        .collect()
-}
-
 /// The class and the three probabilities of every point of the PLY cloud at `path`.
 fn classes_and_probabilities(path: &Path) -> (Vec<u8>, Vec<[f32; 3]>) {
     let table = bounded_data::format::read(path).unwrap();
     let column = |name: &str| table.property(name).expect(name).clone();
     let class = column("scalar_class");
-    let p = ["scalar_p_nonedge", "scalar_p_sharp", "scalar_p_boundary"].map(|n| column(n));
+    let p = ["scalar_p_nonedge", "scalar_p_sharp", "scalar_p_boundary"].map(column);
     (0..table.len())
         .map(|i| {
             (
@@ -181,11 +170,14 @@ fn calibrate_on_records_the_decision_that_detect_applies() {
     assert!(run.status.success(), "{}", stderr(&run));
     let file = ModelFile::load(&model).unwrap();
     // The decision of the highest median MCC on those clouds, measured by the library.
-    let clouds = TrainingSource::parse(validation).unwrap().load().unwrap();
+    let loaded = TrainingSource::parse(validation).unwrap().load().unwrap();
+    let clouds: Vec<_> = (loaded.iter())
+        .map(|(name, c)| TrainingCloud::new(name, &c.cloud, &c.labels))
+        .collect();
     let argmax =
         Detector::new(Classifier::from_file(file.clone().with_sensitivity(None).unwrap()).unwrap())
             .unwrap();
-    let chosen = Calibration::measure(&argmax, &training_clouds(&clouds)).unwrap();
+    let chosen = Calibration::measure(&argmax, &clouds).unwrap();
     assert_eq!(file.sensitivity, chosen.chosen_sensitivity());
     assert!(stderr(&run).contains(&format!("deciding by {}", describe(file.sensitivity))));
 

@@ -299,14 +299,25 @@ mod tests {
         assert_eq!((at[3].tp, at[3].fp, at[3].tn, at[3].fn_), (1, 1, 1, 1));
     }
 
+    /// A cloud of one sharp point and one other, scored perfectly (MCC 1).
+    const PERFECT: BinaryConfusion = BinaryConfusion {
+        tp: 1,
+        fp: 0,
+        tn: 1,
+        fn_: 0,
+    };
+
+    /// The calibration of clouds with these confusions at each of [`DECISIONS`].
+    fn of(sweeps: Vec<Vec<BinaryConfusion>>) -> Calibration {
+        Calibration {
+            sharp: Reliability::new(2),
+            boundary: Reliability::new(2),
+            sweeps,
+        }
+    }
+
     #[test]
     fn sensitivity_table_by_hand() {
-        let perfect = BinaryConfusion {
-            tp: 1,
-            fp: 0,
-            tn: 1,
-            fn_: 0,
-        };
         let all_sharp = BinaryConfusion {
             tp: 1,
             fp: 1,
@@ -315,12 +326,8 @@ mod tests {
         };
         // At the lowest sensitivity the cloud is perfect (MCC 1), elsewhere all sharp (0).
         let mut at = vec![all_sharp; DECISIONS.len()];
-        at[1] = perfect;
-        let c = Calibration {
-            sharp: Reliability::new(2),
-            boundary: Reliability::new(2),
-            sweeps: vec![at],
-        };
+        at[1] = PERFECT;
+        let c = of(vec![at]);
         assert_eq!(c.chosen_sensitivity(), Some(0.1));
         let table = sensitivity_table(&[("a", c)]);
         let lines: Vec<&str> = table.lines().collect();
@@ -336,31 +343,20 @@ mod tests {
 
     #[test]
     fn the_most_probable_class_wins_ties_and_medians_decide() {
-        let perfect = BinaryConfusion {
-            tp: 1,
-            fp: 0,
-            tn: 1,
-            fn_: 0,
-        };
         let none = BinaryConfusion {
             tp: 0,
             fp: 0,
             tn: 1,
             fn_: 1,
         };
-        let of = |sweeps| Calibration {
-            sharp: Reliability::new(2),
-            boundary: Reliability::new(2),
-            sweeps,
-        };
         // Every decision perfect: the most probable class is kept.
-        assert_eq!(of(vec![vec![perfect; 10]]).chosen_sensitivity(), None);
+        assert_eq!(of(vec![vec![PERFECT; 10]]).chosen_sensitivity(), None);
         // Sensitivity 0.7 perfect on two clouds of three, the most probable class on one:
         // the median picks 0.7.
         let mut a = vec![none; 10];
-        a[7] = perfect;
+        a[7] = PERFECT;
         let mut b = vec![none; 10];
-        b[0] = perfect;
+        b[0] = PERFECT;
         let c = of(vec![a.clone(), a, b]);
         assert_eq!(c.median_mcc()[7], 1.0);
         assert_eq!(c.chosen_sensitivity(), Some(0.7));

@@ -24,6 +24,17 @@ pub struct TrainingCloud<'a> {
     pub labels: &'a [Class],
 }
 
+impl<'a> TrainingCloud<'a> {
+    /// The cloud `name` of points `cloud` labelled `labels` (one class per point).
+    pub fn new(name: &'a str, cloud: &'a PointCloud, labels: &'a [Class]) -> Self {
+        Self {
+            name,
+            cloud,
+            labels,
+        }
+    }
+}
+
 /// Features and labels of many clouds, concatenated (row-major, `per_point` values a row).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FeatureSet {

@@ -46,11 +46,7 @@ fn load_set(dir: &Path, smooth_edge: Class) -> Result<Vec<(String, LabelledCloud
 /// The clouds as the library's labelled clouds.
 fn training_clouds(clouds: &[(String, LabelledCloud)]) -> Vec<TrainingCloud<'_>> {
     (clouds.iter())
-        .map(|(name, c)| TrainingCloud {
-            name,
-            cloud: &c.cloud,
-            labels: &c.labels,
-        })
+        .map(|(name, c)| TrainingCloud::new(name, &c.cloud, &c.labels))
         .collect()
 }
 
