@@ -12,6 +12,7 @@ use bounded_data::annotate::AnnotateOptions;
 use bounded_data::format::{self, Format};
 use bounded_geom::GeomError;
 use bounded_nn::Detector;
+use bounded_nn::calibration::describe;
 use bounded_nn::report::grouped;
 use bounded_survey::{Event, Options, Plan, ReadOptions, SurveyError, TileReport};
 use std::path::{Path, PathBuf};
@@ -73,12 +74,13 @@ pub fn run(args: &DetectArgs) -> Result<()> {
         all => format!("{} files to {}", all.len(), args.output.display()),
     };
     eprintln!(
-        "{} points: {} sharp edge, {} boundary, {} non-edge; detection {detecting:.2} s ({}){halo}, \
-         total {seconds:.2} s{memory}; wrote {wrote}",
+        "{} points: {} sharp edge, {} boundary, {} non-edge (by {}); detection {detecting:.2} s \
+         ({}){halo}, total {seconds:.2} s{memory}; wrote {wrote}",
         grouped(n),
         count(1),
         count(2),
         count(0),
+        describe(detector.sensitivity()),
         rate(labelled, detecting),
     );
     Ok(())
