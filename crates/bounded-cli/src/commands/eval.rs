@@ -7,6 +7,7 @@ use crate::pipeline;
 use anyhow::Result;
 use bounded_data::peers;
 use bounded_geom::Class;
+use bounded_nn::calibration::describe;
 use bounded_nn::report::{MethodResults, confusion_table, medians_table, per_model_table};
 use std::time::Instant;
 
@@ -47,8 +48,9 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     }
     let points: usize = clouds.iter().map(|c| c.1.cloud.len()).sum();
     eprintln!(
-        "{} clouds, {points} points, {:.1} s",
+        "{} clouds, {points} points, classes by {}, {:.1} s",
         clouds.len(),
+        describe(detector.sensitivity()),
         start.elapsed().as_secs_f64()
     );
     Ok(())
