@@ -42,6 +42,8 @@ fn train_with_custom_widths_writes_a_model_that_detect_uses() {
     let file = ModelFile::load(&model).unwrap();
     assert_eq!(file.model.fusion_widths, vec![5]);
     assert_eq!(file.model.hidden_widths, vec![7, 3]);
+    // No --calibrate-on: the most probable class.
+    assert_eq!(file.sensitivity, None);
     assert!(file.provenance.command.contains("--hidden-widths 7,3"));
 
     let cloud = dir.path().join("box.ply");

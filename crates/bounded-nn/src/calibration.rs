@@ -218,19 +218,18 @@ pub fn describe(sensitivity: Option<f32>) -> String {
 }
 
 /// `file` deciding by the rule of the highest median MCC on the labelled `validation` clouds
-/// ([`Calibration::chosen_sensitivity`]), as training records it; the file unchanged when
-/// there are none. The clouds must be the training kinds but never trained on, nor evaluated
-/// on: the choice is the model's default for every user.
+/// ([`Calibration::chosen_sensitivity`]), as training records it, with the measurement it was
+/// chosen on; without clouds, by the most probable class. The clouds must be the training
+/// kinds but never trained on, nor evaluated on: the choice is the model's default for every
+/// user.
 pub fn with_chosen_sensitivity(
     file: ModelFile,
     validation: &[TrainingCloud<'_>],
-) -> Result<ModelFile, NnError> {
-    if validation.is_empty() {
-        return Ok(file);
-    }
+) -> Result<(ModelFile, Calibration), NnError> {
     let detector = Detector::new(Classifier::from_file(file.clone())?)?.most_probable_class();
-    let chosen = Calibration::measure(&detector, validation)?.chosen_sensitivity();
-    file.with_sensitivity(chosen)
+    let calibration = Calibration::measure(&detector, validation)?;
+    let file = file.with_sensitivity(calibration.chosen_sensitivity())?;
+    Ok((file, calibration))
 }
 
 /// Markdown table of the median sharp MCC of each named calibration at every one of

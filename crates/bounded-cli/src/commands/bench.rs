@@ -114,7 +114,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )
     })?;
     let validation = recipe::generate(&recipe::VALIDATION_SETS, 1)?;
-    let main_file = with_chosen_sensitivity(main_file, &training_clouds(&validation))?;
+    let (main_file, on_validation) =
+        with_chosen_sensitivity(main_file, &training_clouds(&validation))?;
+    drop(validation);
     if !args.quick {
         let _ = writeln!(
             report,
@@ -303,7 +305,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             Class::Sharp
         )])
     );
-    report.push_str(&calibration_section(&detector, &sets, &validation)?);
+    report.push_str(&calibration_section(&detector, &sets, on_validation)?);
     report.push_str(&scans_section(&detector, &args.data, &args.output)?);
     let _ = writeln!(
         report,
@@ -317,15 +319,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// Calibration on the generated `validation` clouds (training-side: the training kinds and
-/// noise, other seeds), the decision they chose (the model's default), and MCC against the
+/// Calibration on the generated validation clouds (`on_validation`, measured when the main
+/// model's decision was chosen: the training kinds and noise, other seeds), the decision they
+/// chose (the model's default), and MCC against the
 /// sensitivity on every evaluation set, for a user to choose a trade-off.
 fn calibration_section(
     detector: &Detector,
     sets: &[EvalSet],
-    validation: &[(String, LabelledCloud)],
+    on_validation: Calibration,
 ) -> Result<String> {
-    let on_validation = Calibration::measure(detector, &training_clouds(validation))?;
     let chosen = describe(detector.sensitivity());
     let mut out = format!(
         "## Calibration and sensitivity

@@ -83,7 +83,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         )
     })?;
     let validation = training_clouds(&validation);
-    let file = progress::spinning("calibrate", "", || {
+    let (file, _) = progress::spinning("calibrate", "", || {
         with_chosen_sensitivity(file, &validation)
     })?;
     file.save(&args.output)?;
