@@ -124,7 +124,8 @@ pub struct DetectArgs {
 pub struct TrainArgs {
     /// Training data: directories of labelled clouds, `abc:DIR` for ABC models (OBJ meshes
     /// beside their features YAML files), or `generated:KIND:SEED[:SHAPES]` for a synthetic
-    /// set made on the fly (free-form label rules after it: `:depth=1:angle=10:band=0.5:noise=3`).
+    /// set made on the fly (options after it: free-form label rules
+    /// `:depth=1:angle=10:band=0.5:noise=3`, sparse planes on the mesh kinds `:faces=3`).
     /// Repeat to combine.
     #[arg(long, required = true)]
     pub data: Vec<String>,
@@ -249,8 +250,8 @@ pub enum PositiveArg {
 /// Arguments of `generate`.
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
-    /// Which kind of set: cad, random, boundary, mixed or freeform; free-form label rules
-    /// after it as for `train --data` (`freeform:depth=1:angle=10:band=1.5:noise=3`).
+    /// Which kind of set: cad, random, boundary, mixed or freeform; options after it as for
+    /// `train --data` (`freeform:depth=1:angle=10:band=1.5:noise=3`, `cad:faces=3`).
     #[arg(long, default_value = "mixed")]
     pub kind: String,
     /// Output directory (created).

@@ -393,22 +393,30 @@ mod tests {
         let config = SetConfig::from_spec("generated:freeform:4:8:angle=20:noise=3").unwrap();
         assert_eq!(config.label_rule.min_angle, 20.0);
         assert_eq!(config.label_rule.min_depth_per_noise, 3.0);
+        // The mesh kinds' sparse planes.
+        let config = SetConfig::from_spec("generated:cad:5:8:faces=3").unwrap();
+        assert_eq!(config.face_spacing, 3.0);
         for (spec, expected) in [
             (
                 "generated:cad",
-                "expected generated:KIND:SEED[:SHAPES[:RULE...]]",
+                "expected generated:KIND:SEED[:SHAPES[:OPTION...]]",
             ),
             (
                 "generated:cad:1:2:depth=1",
-                "label rules (depth=, angle=, band=, noise=) are for the freeform kind",
+                "depth= is a label rule of the freeform kind",
             ),
             (
+                "generated:freeform:1:2:faces=2",
+                "faces= is for the mesh kinds, not freeform",
+            ),
+            ("generated:cad:1:2:faces=0.5", "face spacing 0.5"),
+            (
                 "generated:freeform:1:2:3",
-                "\"3\" is not depth=, angle=, band= or noise= a number",
+                "\"3\" is not depth=, angle=, band=, noise= or faces= a number",
             ),
             (
                 "generated:freeform:1:2:depth=x",
-                "\"depth=x\" is not depth=, angle=, band= or noise= a number",
+                "\"depth=x\" is not depth=, angle=, band=, noise= or faces= a number",
             ),
             ("generated:freeform:1:2:band=0", "label band 0"),
             (

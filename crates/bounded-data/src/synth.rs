@@ -164,7 +164,15 @@ pub struct SetConfig {
     pub outlier_fraction: f64,
     /// The labels of the free-form kind (the mesh kinds keep theirs: see [`Sampling`]).
     pub label_rule: LabelRule,
+    /// The sparsest fill of planar faces in mesh-vertex mode, in multiples of the crease
+    /// rows' spacing: each such shape draws its [`ShapeSpec::face_spacing`] uniformly from 1
+    /// to this (at most [`MAX_FACE_SPACING`]; 1, the default, fills every face alike).
+    pub face_spacing: f64,
 }
+
+/// The largest [`SetConfig::face_spacing`]: sparser planes hold almost no points between
+/// their crease rows.
+pub const MAX_FACE_SPACING: f64 = 8.0;
 
 impl SetConfig {
     /// A configuration with the defaults: 5,000..30,000 points, noise levels 0, 0.1, 0.2,
@@ -181,6 +189,7 @@ impl SetConfig {
             noise_direction: NoiseDirection::Isotropic,
             outlier_fraction: 0.002,
             label_rule: LabelRule::default(),
+            face_spacing: 1.0,
         }
     }
 
@@ -198,6 +207,7 @@ impl SetConfig {
         }
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
         check_outlier_fraction(self.outlier_fraction)?;
+        check_face_spacing(self.face_spacing)?;
         self.label_rule.validate()
     }
 
@@ -279,6 +289,13 @@ impl SetConfig {
             .unwrap_or(ShapeKind::Box);
         let sampling = self.kind.sampling(rng);
         let (points, noise, outlier_fraction) = self.amounts(rng);
+        let seed = rng.random();
+        // Drawn last, so that sparse faces leave every other draw of the shape as it was.
+        let face_spacing = if self.face_spacing > 1.0 {
+            rng.random_range(1.0..=self.face_spacing)
+        } else {
+            1.0
+        };
         ShapeSpec {
             kind,
             sampling,
@@ -286,7 +303,8 @@ impl SetConfig {
             noise,
             noise_direction: self.noise_direction,
             outlier_fraction,
-            seed: rng.random(),
+            seed,
+            face_spacing,
         }
     }
 
@@ -327,6 +345,9 @@ pub struct ShapeSpec {
     pub outlier_fraction: f64,
     /// Seed of the shape's geometry, pose and sampling.
     pub seed: u64,
+    /// In mesh-vertex mode, the minimum distance of the fill on planar faces, in multiples
+    /// of the crease rows' and curved faces' (1: the same everywhere).
+    pub face_spacing: f64,
 }
 
 /// Generates a whole set in parallel, in index order.
@@ -365,6 +386,7 @@ pub fn generate_one(
 /// range (see [`SetConfig::validate`]).
 pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     check_noise(spec.noise)?;
+    check_face_spacing(spec.face_spacing)?;
     check_outlier_fraction(spec.outlier_fraction)?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut mesh = spec.kind.build(&mut rng);
@@ -372,7 +394,14 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     mesh.map(|p| pose.apply(p));
     let mesh = mesh.welded();
     let features = mesh.features();
-    let mut sampled = sample::sample(&mesh, &features, spec.sampling, spec.points, &mut rng);
+    let mut sampled = sample::sample(
+        &mesh,
+        &features,
+        spec.sampling,
+        spec.points,
+        spec.face_spacing,
+        &mut rng,
+    );
     let spacing = perturb::median_spacing(&sampled.points, sampled.spacing_hint);
     let sigma = spec.noise * spacing;
     match spec.noise_direction {
@@ -406,6 +435,19 @@ fn check_noise(level: f64) -> Result<(), DataError> {
     }
     Err(DataError::Generator {
         what: format!("noise level {level}: a multiple of the point spacing, 0 or more"),
+    })
+}
+
+/// A face spacing must lie in `1..=MAX_FACE_SPACING`.
+fn check_face_spacing(spacing: f64) -> Result<(), DataError> {
+    if (1.0..=MAX_FACE_SPACING).contains(&spacing) {
+        return Ok(());
+    }
+    Err(DataError::Generator {
+        what: format!(
+            "face spacing {spacing}: a multiple of the crease rows' spacing, 1 to \
+             {MAX_FACE_SPACING}"
+        ),
     })
 }
 
@@ -465,11 +507,10 @@ impl SetKind {
 }
 
 impl SetConfig {
-    /// The set of `generated:KIND:SEED[:SHAPES[:RULE...]]` (60 shapes by default), with the
-    /// defaults of [`SetConfig::new`]; for the free-form kind, each `RULE` of `depth=D`,
-    /// `angle=A`, `band=B` or `noise=F` sets that field of its [`LabelRule`] (`min_depth`,
-    /// `min_angle`, `band`, `min_depth_per_noise`), for example
-    /// `generated:freeform:4:80:depth=1:band=0.5:noise=3`.
+    /// The set of `generated:KIND:SEED[:SHAPES[:OPTION...]]` (60 shapes by default), with
+    /// the defaults of [`SetConfig::new`] but for its options (see
+    /// [`with_options`](Self::with_options)), for example
+    /// `generated:freeform:4:80:depth=1:band=0.5:noise=3` or `generated:cad:5:40:faces=3`.
     pub fn from_spec(spec: &str) -> Result<SetConfig, DataError> {
         let bad = |what: &str| DataError::Generator {
             what: format!("{spec:?}: {what}"),
@@ -478,45 +519,52 @@ impl SetConfig {
         let (kind, seed, shapes, rules) = match fields[..] {
             ["generated", kind, seed] => (kind, seed, "60", &[][..]),
             ["generated", kind, seed, shapes, ref rules @ ..] => (kind, seed, shapes, rules),
-            _ => return Err(bad("expected generated:KIND:SEED[:SHAPES[:RULE...]]")),
+            _ => return Err(bad("expected generated:KIND:SEED[:SHAPES[:OPTION...]]")),
         };
         let seed = seed.parse().map_err(|_| bad("bad seed"))?;
         let shapes = (shapes.parse().ok().filter(|&n: &usize| n > 0))
             .ok_or_else(|| bad("the shape count must be a whole number above 0"))?;
         SetConfig::new(SetKind::from_name(kind)?, seed, shapes)
-            .with_label_rules(rules)
+            .with_options(rules)
             .map_err(|e| match e {
                 DataError::Generator { what } => bad(&what),
                 other => other,
             })
     }
 
-    /// This set with the free-form label `rules`, each `depth=D`, `angle=A`, `band=B` or
-    /// `noise=F` (see [`from_spec`](Self::from_spec)), checked; rules on another kind are
+    /// This set with `options`, each `NAME=NUMBER`, checked: for the free-form kind the
+    /// label rules `depth=`, `angle=`, `band=` and `noise=` (its [`LabelRule`]'s
+    /// `min_depth`, `min_angle`, `band` and `min_depth_per_noise`); for the mesh kinds
+    /// `faces=` ([`face_spacing`](Self::face_spacing)). An option of the other kinds is
     /// refused.
-    pub fn with_label_rules(mut self, rules: &[&str]) -> Result<SetConfig, DataError> {
+    pub fn with_options(mut self, options: &[&str]) -> Result<SetConfig, DataError> {
         let bad = |what: String| DataError::Generator { what };
-        if !rules.is_empty() && self.kind != SetKind::Freeform {
-            return Err(bad(
-                "label rules (depth=, angle=, band=, noise=) are for the freeform kind".into(),
-            ));
-        }
-        for rule in rules {
-            let not_a_rule = || {
+        let freeform = self.kind == SetKind::Freeform;
+        for option in options {
+            let not_an_option = || {
                 bad(format!(
-                    "{rule:?} is not depth=, angle=, band= or noise= a number"
+                    "{option:?} is not depth=, angle=, band=, noise= or faces= a number"
                 ))
             };
-            let (name, value) = rule.split_once('=').ok_or_else(not_a_rule)?;
-            let value = value.parse::<f64>().map_err(|_| not_a_rule())?;
+            let (name, value) = option.split_once('=').ok_or_else(not_an_option)?;
+            let value = value.parse::<f64>().map_err(|_| not_an_option())?;
             let label = &mut self.label_rule;
-            *match name {
-                "depth" => &mut label.min_depth,
-                "angle" => &mut label.min_angle,
-                "band" => &mut label.band,
-                "noise" => &mut label.min_depth_per_noise,
-                _ => return Err(not_a_rule()),
-            } = value;
+            let (field, for_freeform) = match name {
+                "depth" => (&mut label.min_depth, true),
+                "angle" => (&mut label.min_angle, true),
+                "band" => (&mut label.band, true),
+                "noise" => (&mut label.min_depth_per_noise, true),
+                "faces" => (&mut self.face_spacing, false),
+                _ => return Err(not_an_option()),
+            };
+            if for_freeform != freeform {
+                return Err(bad(if for_freeform {
+                    format!("{name}= is a label rule of the freeform kind")
+                } else {
+                    format!("{name}= is for the mesh kinds, not freeform")
+                }));
+            }
+            *field = value;
         }
         self.validate()?;
         Ok(self)
@@ -611,6 +659,7 @@ mod tests {
             noise_direction: NoiseDirection::Isotropic,
             outlier_fraction: 0.01,
             seed: 0,
+            face_spacing: 1.0,
         };
         for spec in every_shape(template) {
             let (kind, sampling) = (spec.kind, spec.sampling);
@@ -647,6 +696,7 @@ mod tests {
             noise_direction: NoiseDirection::Normal,
             outlier_fraction: 0.0,
             seed: 0,
+            face_spacing: 1.0,
         };
         for spec in every_shape(template) {
             let noisy = generate_shape(&spec).unwrap();
@@ -677,6 +727,7 @@ mod tests {
                 noise_direction: NoiseDirection::Isotropic,
                 outlier_fraction: 0.0,
                 seed: 11,
+                face_spacing: 1.0,
             };
             let clean = generate_shape(&ShapeSpec {
                 noise: 0.0,
@@ -716,6 +767,7 @@ mod tests {
             noise_direction: NoiseDirection::Normal,
             outlier_fraction: 0.0,
             seed: 1,
+            face_spacing: 1.0,
         };
         assert!(generate_shape(&spec).is_ok());
         for noise in [-0.1, f64::NAN, f64::INFINITY] {
@@ -735,9 +787,57 @@ mod tests {
             .unwrap_err();
             assert!(err.to_string().contains("outlier fraction"), "{err}");
         }
+        for face_spacing in [0.5, MAX_FACE_SPACING + 1.0, f64::NAN] {
+            let err = generate_shape(&ShapeSpec {
+                face_spacing,
+                ..spec.clone()
+            })
+            .unwrap_err();
+            assert!(err.to_string().contains("face spacing"), "{err}");
+        }
         let mut set = small(SetKind::Cad, 1, 2);
         assert!(set.validate().is_ok());
         set.noise_levels = vec![0.2, -1.0];
         assert!(matches!(generate(&set), Err(DataError::Generator { .. })));
+    }
+
+    #[test]
+    fn sparse_faces_keep_the_shapes_and_raise_the_share_of_crease_rows() {
+        let plain = small(SetKind::Cad, 8, 12);
+        let sparse = SetConfig {
+            face_spacing: 3.0,
+            ..plain.clone()
+        };
+        let (mut rows_plain, mut rows_sparse) = (0.0, 0.0);
+        for i in 0..plain.shapes {
+            let (CloudSpec::Mesh(a), CloudSpec::Mesh(b)) = (plain.spec(i), sparse.spec(i)) else {
+                panic!("a mesh kind gives mesh shapes");
+            };
+            // Everything but the face spacing is drawn as before.
+            assert_eq!(a.face_spacing, 1.0);
+            assert!((1.0..=3.0).contains(&b.face_spacing), "{}", b.face_spacing);
+            assert_eq!(
+                ShapeSpec {
+                    face_spacing: 1.0,
+                    ..b.clone()
+                },
+                a
+            );
+            let share = |spec: &ShapeSpec| {
+                let c = generate_shape(spec).unwrap();
+                let n = c.cloud.len() as f64;
+                let target = spec.points as f64;
+                assert!(n > 0.6 * target && n < 1.4 * target, "{spec:?}: {n}");
+                let counts = c.class_counts();
+                (counts[Class::Sharp as usize] + counts[Class::Boundary as usize]) as f64 / n
+            };
+            rows_plain += share(&a);
+            rows_sparse += share(&b);
+        }
+        // With the same number of points, denser rows beside sparser planes hold more of them.
+        assert!(
+            rows_sparse > 1.2 * rows_plain,
+            "{rows_sparse} vs {rows_plain}"
+        );
     }
 }

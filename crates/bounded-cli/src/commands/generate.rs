@@ -10,12 +10,12 @@ use std::time::Instant;
 
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let start = Instant::now();
-    // `freeform:depth=1:band=1.5` carries label rules, as `train --data` does.
+    // `freeform:depth=1:band=1.5` or `cad:faces=3` carries options, as `train --data` does.
     let mut fields = args.kind.split(':');
     let kind = SetKind::from_name(fields.next().unwrap_or_default()).context("--kind")?;
-    let rules: Vec<&str> = fields.collect();
+    let options: Vec<&str> = fields.collect();
     let config = SetConfig::new(kind, args.seed, args.shapes.map_or(60, NonZeroUsize::get))
-        .with_label_rules(&rules)
+        .with_options(&options)
         .context("--kind")?
         .with_noise(args.noise.noise.as_deref(), args.noise.noise_along.into())
         .context("--noise")?;

@@ -14,6 +14,11 @@ use bounded_geom::vec3::{V3, cross, dot, norm, normalize, scale, sub};
 /// no label depends on which side of the threshold a rounding error falls.
 pub(crate) const SHARP_DEVIATION_DEG: f64 = 18.0;
 
+/// Faces deviating from flat by less than this (degrees) across a smooth edge lie in one
+/// plane ([`Mesh::planar_triangles`]): far below the 2-8 degrees a curved surface's
+/// tessellation turns by at an edge, far above rounding.
+pub(crate) const PLANAR_DEVIATION_DEG: f64 = 0.5;
+
 /// Border or crease polylines whose direction turns by more than this (degrees) at a vertex
 /// are split there, so resampling keeps a point exactly on every corner.
 const CORNER_TURN_DEG: f64 = 30.0;
@@ -199,17 +204,20 @@ impl Mesh {
         }
     }
 
-    /// Sharp creases and borders, chained into polylines (the mesh must be welded).
-    pub(crate) fn features(&self) -> Features {
-        // (low vertex, high vertex, opposite vertex) per triangle edge, grouped by sorting:
-        // deterministic, unlike iterating a hash map.
-        let mut edges: Vec<(u32, u32, u32)> = self
-            .triangles
-            .iter()
-            .flat_map(|&[a, b, c]| [(a, b, c), (b, c, a), (c, a, b)])
-            .map(|(u, v, o)| (u.min(v), u.max(v), o))
+    /// Every triangle edge as (low vertex, high vertex, opposite vertex, triangle), sorted so
+    /// that the uses of one edge are adjacent: deterministic, unlike a hash map.
+    fn edge_uses(&self) -> Vec<(u32, u32, u32, u32)> {
+        let mut edges: Vec<(u32, u32, u32, u32)> = (self.triangles.iter().zip(0..))
+            .flat_map(|(&[a, b, c], t)| [(a, b, c, t), (b, c, a, t), (c, a, b, t)])
+            .map(|(u, v, o, t)| (u.min(v), u.max(v), o, t))
             .collect();
         edges.sort_unstable();
+        edges
+    }
+
+    /// Sharp creases and borders, chained into polylines (the mesh must be welded).
+    pub(crate) fn features(&self) -> Features {
+        let edges = self.edge_uses();
         let cos_limit = (180.0 - SHARP_DEVIATION_DEG).to_radians().cos();
         let mut sharp = Vec::new();
         let mut border = Vec::new();
@@ -225,6 +233,26 @@ impl Mesh {
             sharp: self.chain(&sharp),
             border: self.chain(&border),
         }
+    }
+
+    /// Which triangles lie on a planar face: those whose neighbour across every smooth edge
+    /// (two faces, not a crease) lies in the same plane, within [`PLANAR_DEVIATION_DEG`].
+    /// Creases and borders bound a face, so they do not count; the tessellation of a curved
+    /// surface turns by a few degrees at every edge (the mesh must be welded).
+    pub(crate) fn planar_triangles(&self) -> Vec<bool> {
+        let sharp_cos = (180.0 - SHARP_DEVIATION_DEG).to_radians().cos();
+        let planar_cos = (180.0 - PLANAR_DEVIATION_DEG).to_radians().cos();
+        let mut planar = vec![true; self.triangles.len()];
+        for group in self.edge_uses().chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+            if let [(a, b, c, s), (_, _, d, t)] = *group {
+                let cos = self.interior_cos(a, b, c, d);
+                if cos > planar_cos && cos <= sharp_cos {
+                    planar[s as usize] = false;
+                    planar[t as usize] = false;
+                }
+            }
+        }
+        planar
     }
 
     /// Cosine of the interior angle between the faces `a b c` and `a b d` along edge `a b`
@@ -397,6 +425,30 @@ pub(crate) mod tests {
         assert_eq!(m.triangles.len(), 4);
         let area: f64 = m.triangles.iter().map(|&t| m.triangle_area(t)).sum();
         assert!((area - 3.0).abs() < 1e-12, "{area}");
+    }
+
+    #[test]
+    fn planar_triangles_are_those_of_flat_faces_not_of_a_curved_one() {
+        // A cube's faces are planes, creases between them.
+        assert!(cube().planar_triangles().iter().all(|&p| p));
+        // A cylinder of 32 strips (11.25 degrees between strips) on a flat disc, square to
+        // it (a crease): the strips are curved, the disc planar.
+        let mut m = Mesh::default();
+        let ring = |z: f64| {
+            (0..32).map(move |i| {
+                let t = i as f64 / 32.0 * std::f64::consts::TAU;
+                [t.cos(), t.sin(), z]
+            })
+        };
+        let (bottom, top) = (m.vertices_of(ring(0.0)), m.vertices_of(ring(1.0)));
+        m.strip(&bottom, &top, true);
+        let strips = m.triangles.len();
+        let centre = m.vertex([0.0; 3]);
+        m.fan(centre, &bottom);
+        let planar = m.welded().planar_triangles();
+        assert_eq!(planar.len(), strips + 32);
+        assert!(planar[..strips].iter().all(|&p| !p), "{planar:?}");
+        assert!(planar[strips..].iter().all(|&p| p), "{planar:?}");
     }
 
     #[test]

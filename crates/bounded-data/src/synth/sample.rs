@@ -4,7 +4,9 @@
 //!   points exactly on every crease and border, spaced like the faces, then faces filled by
 //!   dart throwing with a minimum distance, which gives near-regular spacing. Row points take
 //!   the class of their row (sharp rows first, so sharp wins where a crease meets a border);
-//!   every other point is non-edge.
+//!   every other point is non-edge. Planar faces may be filled more sparsely than the rows
+//!   and the curved faces (a face spacing above 1), as a CAD triangulation leaves a plane
+//!   with few vertices where it follows a crease or a curve closely.
 //! * Random mode mimics the Default clouds: uniform random points on the surface. A point is
 //!   sharp when it lies within [`W_SHARP`] x the local spacing of a crease, else boundary
 //!   within [`W_BORDER`] x the local spacing of a border, else non-edge.
@@ -108,25 +110,22 @@ impl<'a> Surface<'a> {
     fn new(mesh: &'a Mesh, density: &Density) -> Self {
         let mut total = 0.0;
         let mut weighted_area = 0.0;
-        let cumulative = mesh
-            .triangles
-            .iter()
-            .map(|&t| {
-                let area = mesh.triangle_area(t);
-                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-                weighted_area += area * density.factor(scale(add(add(a, b), c), 1.0 / 3.0));
-                total += area;
-                total
-            })
-            .collect();
-        Self {
+        let mut surface = Self {
             mesh,
-            cumulative,
-            weighted_area,
+            cumulative: Vec::with_capacity(mesh.triangles.len()),
+            weighted_area: 0.0,
+        };
+        for &t in &mesh.triangles {
+            weighted_area += surface.weighted_area_of(t, density);
+            total += mesh.triangle_area(t);
+            surface.cumulative.push(total);
         }
+        surface.weighted_area = weighted_area;
+        surface
     }
 
-    fn point(&self, rng: &mut impl Rng) -> V3 {
+    /// A random point and the index of its triangle.
+    fn point(&self, rng: &mut impl Rng) -> (V3, usize) {
         let total = self.cumulative.last().copied().unwrap_or(0.0);
         let x = rng.random::<f64>() * total;
         let t = self
@@ -135,10 +134,17 @@ impl<'a> Surface<'a> {
             .min(self.cumulative.len() - 1);
         let [a, b, c] = self.mesh.triangles[t].map(|i| self.mesh.vertices[i as usize]);
         let (r1, r2): (f64, f64) = (rng.random::<f64>().sqrt(), rng.random());
-        add(
+        let p = add(
             add(scale(a, 1.0 - r1), scale(b, r1 * (1.0 - r2))),
             scale(c, r1 * r2),
-        )
+        );
+        (p, t)
+    }
+
+    /// The density factor at the centroid of triangle `t`, times its area.
+    fn weighted_area_of(&self, t: [u32; 3], density: &Density) -> f64 {
+        let [a, b, c] = t.map(|i| self.mesh.vertices[i as usize]);
+        self.mesh.triangle_area(t) * density.factor(scale(add(add(a, b), c), 1.0 / 3.0))
     }
 }
 
@@ -152,18 +158,23 @@ pub(crate) fn random_direction(rng: &mut impl Rng) -> V3 {
     }
 }
 
-/// Samples about `target` points on a welded, non-empty `mesh` whose features are `features`.
+/// Samples about `target` points on a welded, non-empty `mesh` whose features are `features`;
+/// in mesh-vertex mode, planar faces are filled with `face_spacing` (1 or more) times the
+/// minimum distance of the rows and the curved faces.
 pub(crate) fn sample(
     mesh: &Mesh,
     features: &Features,
     sampling: Sampling,
     target: usize,
+    face_spacing: f64,
     rng: &mut impl Rng,
 ) -> Sampled {
     let density = Density::random(mesh, rng);
     let surface = Surface::new(mesh, &density);
     match sampling {
-        Sampling::MeshVertex => mesh_vertex(&surface, &density, features, target, rng),
+        Sampling::MeshVertex => {
+            mesh_vertex(&surface, &density, features, target, face_spacing, rng)
+        }
         Sampling::Random => random(&surface, &density, features, target, rng),
     }
 }
@@ -173,13 +184,44 @@ fn mesh_vertex(
     density: &Density,
     features: &Features,
     target: usize,
+    face_spacing: f64,
     rng: &mut impl Rng,
 ) -> Sampled {
     let (attempts_per_area, fill_density) = FILL_LEVELS[rng.random_range(0..FILL_LEVELS.len())];
-    let r0 = (fill_density * surface.weighted_area / target as f64).sqrt();
+    // Each triangle's minimum distance, relative to the rows': a planar face's holds
+    // `face_spacing^2` times fewer points per area.
+    let spread: Vec<f64> = if face_spacing > 1.0 {
+        let planar = surface.mesh.planar_triangles();
+        planar
+            .iter()
+            .map(|&p| if p { face_spacing } else { 1.0 })
+            .collect()
+    } else {
+        vec![1.0; surface.mesh.triangles.len()]
+    };
+    // The area the fill covers at the rows' spacing, so that the count stays near `target`.
+    let filled_area: f64 = (surface.mesh.triangles.iter().zip(&spread))
+        .map(|(&t, &m)| surface.weighted_area_of(t, density) / (m * m))
+        .sum();
+    let r0 = if face_spacing > 1.0 {
+        // Rows beside sparser planes hold points the plane's fill does not make up for:
+        // about `length / r0 x (1 - 1 / face_spacing)`, so the count is
+        // `a / r0^2 + b / r0`, solved for `r0`.
+        let length: f64 = (features.sharp.iter().chain(&features.border))
+            .map(Polyline::length)
+            .sum();
+        let (a, b, n) = (
+            fill_density * filled_area,
+            length * (1.0 - 1.0 / face_spacing),
+            target as f64,
+        );
+        (b + (b * b + 4.0 * a * n).sqrt()) / (2.0 * n)
+    } else {
+        (fill_density * filled_area / target as f64).sqrt()
+    };
     let radius = |p: V3| r0 / density.factor(p).sqrt();
     let mut grid = Grid::new(
-        r0 / (1.0 - density.gradient).sqrt(),
+        face_spacing.max(1.0) * r0 / (1.0 - density.gradient).sqrt(),
         bounds(surface.mesh.vertices.iter().copied()),
     );
     let mut labels = Vec::with_capacity(target + target / 4);
@@ -201,8 +243,8 @@ fn mesh_vertex(
     }
     let attempts = (attempts_per_area * surface.weighted_area / (r0 * r0)) as usize;
     for _ in 0..attempts {
-        let p = surface.point(rng);
-        if !grid.any_within(p, radius(p)) {
+        let (p, t) = surface.point(rng);
+        if !grid.any_within(p, spread[t] * radius(p)) {
             grid.insert(p);
             labels.push(Class::NonEdge);
         }
@@ -257,7 +299,7 @@ fn random(
     let mut points = Vec::with_capacity(target);
     let mut labels = Vec::with_capacity(target);
     while points.len() < target {
-        let p = surface.point(rng);
+        let (p, _) = surface.point(rng);
         if rng.random::<f64>() * (1.0 + density.gradient) > density.factor(p) {
             continue;
         }
@@ -316,7 +358,7 @@ mod tests {
         let cube = unit_cube();
         let f = cube.features();
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let s = sample(&cube, &f, Sampling::MeshVertex, 6000, &mut rng);
+        let s = sample(&cube, &f, Sampling::MeshVertex, 6000, 1.0, &mut rng);
         let mut sharp = 0;
         for (p, &c) in s.points.iter().zip(&s.labels) {
             let on_edge = cube_edge_distance(*p) < 1e-9;
@@ -343,12 +385,75 @@ mod tests {
         assert!(n > 0.75 * 6000.0 && n < 1.3 * 6000.0, "{n}");
     }
 
+    /// The median distance from each of `points` to its nearest other one (brute force).
+    fn median_nearest(points: &[V3]) -> f64 {
+        let mut d: Vec<f64> = (points.iter().enumerate())
+            .map(|(i, &p)| {
+                (points.iter().enumerate())
+                    .filter(|&(j, _)| j != i)
+                    .map(|(_, &q)| norm(sub(p, q)))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        d.sort_by(f64::total_cmp);
+        d[d.len() / 2]
+    }
+
+    #[test]
+    fn sparse_faces_spread_the_fill_of_planes_only() {
+        let cube = unit_cube();
+        let f = cube.features();
+        let spacings = [1.0, 2.0].map(|face_spacing| {
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            let s = sample(
+                &cube,
+                &f,
+                Sampling::MeshVertex,
+                4000,
+                face_spacing,
+                &mut rng,
+            );
+            let n = s.points.len() as f64;
+            assert!(n > 0.7 * 4000.0 && n < 1.3 * 4000.0, "{face_spacing}: {n}");
+            let of = |class| {
+                let p: Vec<V3> = (s.points.iter().zip(&s.labels))
+                    .filter(|(_, c)| **c == class)
+                    .map(|(p, _)| *p)
+                    .collect();
+                median_nearest(&p)
+            };
+            (of(Class::NonEdge), of(Class::Sharp))
+        });
+        // Face points lie about twice as far apart, relative to the crease rows' step.
+        let ratio = |(face, row): (f64, f64)| face / row;
+        let spread = ratio(spacings[1]) / ratio(spacings[0]);
+        assert!((1.7..2.3).contains(&spread), "{spacings:?}");
+        // A surface without planar faces is sampled as before, point for point.
+        use std::f64::consts::{FRAC_PI_2, TAU};
+        let arc = super::super::profile::arc([0.0, 0.0], 1.0, -FRAC_PI_2, FRAC_PI_2);
+        let sphere = super::super::profile::revolve(&arc, 72, TAU, false).welded();
+        let f = sphere.features();
+        let [a, b] = [1.0, 3.0].map(|face_spacing| {
+            let mut rng = ChaCha8Rng::seed_from_u64(6);
+            sample(
+                &sphere,
+                &f,
+                Sampling::MeshVertex,
+                1500,
+                face_spacing,
+                &mut rng,
+            )
+            .points
+        });
+        assert_eq!(a, b);
+    }
+
     #[test]
     fn random_cube_labels_a_band_of_a_third_spacing() {
         let cube = unit_cube();
         let f = cube.features();
         let mut rng = ChaCha8Rng::seed_from_u64(2);
-        let s = sample(&cube, &f, Sampling::Random, 6000, &mut rng);
+        let s = sample(&cube, &f, Sampling::Random, 6000, 1.0, &mut rng);
         assert_eq!(s.points.len(), 6000);
         // The local spacing is at most sqrt(6 / (6000 * 0.4)) = 0.05.
         let max_band = W_SHARP * 0.05;
@@ -380,7 +485,7 @@ mod tests {
         .welded();
         let f = disc.features();
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let s = sample(&disc, &f, Sampling::MeshVertex, 3000, &mut rng);
+        let s = sample(&disc, &f, Sampling::MeshVertex, 3000, 1.0, &mut rng);
         // The border is the 72-gon inscribed in the unit circle: its points have radius in
         // [cos(2.5 deg), 1].
         let inner = (2.5_f64).to_radians().cos();
@@ -407,7 +512,7 @@ mod tests {
         let f = sphere.features();
         for sampling in [Sampling::MeshVertex, Sampling::Random] {
             let mut rng = ChaCha8Rng::seed_from_u64(4);
-            let s = sample(&sphere, &f, sampling, 2000, &mut rng);
+            let s = sample(&sphere, &f, sampling, 2000, 1.0, &mut rng);
             assert!(
                 s.labels.iter().all(|&c| c == Class::NonEdge),
                 "{sampling:?}"

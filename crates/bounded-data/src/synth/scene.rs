@@ -32,6 +32,7 @@ pub fn demo_scene(seed: u64) -> Result<LabelledCloud, DataError> {
             noise_direction: NoiseDirection::Isotropic,
             outlier_fraction: 0.0,
             seed: seed.wrapping_mul(31).wrapping_add(i as u64),
+            face_spacing: 1.0,
         };
         let shape = generate_shape(&spec)?;
         let cloud = &shape.cloud;
