@@ -8,7 +8,9 @@
 //! sampled in one of two [`Sampling`] modes (see there for the label rules), and perturbed by
 //! Gaussian noise (a multiple of the median nearest-neighbour spacing, in every coordinate or
 //! along the surface normal only; labels stay those of the clean points) and a few outliers
-//! (non-edge).
+//! (non-edge). With [`SetConfig::face_spacing`] above 1 (spec option `faces=F`), mesh-vertex
+//! shapes fill their planar faces more sparsely than their crease rows, as SPEC.md describes
+//! the ABC clouds.
 //!
 //! The free-form kind ([`SetKind::Freeform`], see [`generate_freeform`]) is built
 //! differently: smooth parametric bases (height fields, bent and twisted sheets, shells)
