@@ -37,6 +37,7 @@ pub fn box_cloud(points: usize, seed: u64) -> LabelledCloud {
         noise_direction: NoiseDirection::Isotropic,
         outlier_fraction: 0.0,
         seed,
+        face_spacing: 1.0,
     })
     .expect("generated")
 }
