@@ -384,8 +384,8 @@ pub fn generate_one(
 
 /// Generates one labelled cloud.
 ///
-/// Fails when `spec.points` is 0 (an empty cloud) or its noise or outlier fraction is out of
-/// range (see [`SetConfig::validate`]).
+/// Fails when `spec.points` is 0 (an empty cloud) or its noise, face spacing or outlier
+/// fraction is out of range (see [`SetConfig::validate`]).
 pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     check_noise(spec.noise)?;
     check_face_spacing(spec.face_spacing)?;

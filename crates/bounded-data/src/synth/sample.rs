@@ -109,18 +109,16 @@ struct Surface<'a> {
 impl<'a> Surface<'a> {
     fn new(mesh: &'a Mesh, density: &Density) -> Self {
         let mut total = 0.0;
-        let mut weighted_area = 0.0;
         let mut surface = Self {
             mesh,
             cumulative: Vec::with_capacity(mesh.triangles.len()),
             weighted_area: 0.0,
         };
         for &t in &mesh.triangles {
-            weighted_area += surface.weighted_area_of(t, density);
+            surface.weighted_area += surface.weighted_area_of(t, density);
             total += mesh.triangle_area(t);
             surface.cumulative.push(total);
         }
-        surface.weighted_area = weighted_area;
         surface
     }
 
@@ -188,22 +186,17 @@ fn mesh_vertex(
     rng: &mut impl Rng,
 ) -> Sampled {
     let (attempts_per_area, fill_density) = FILL_LEVELS[rng.random_range(0..FILL_LEVELS.len())];
-    // Each triangle's minimum distance, relative to the rows': a planar face's holds
-    // `face_spacing^2` times fewer points per area.
-    let spread: Vec<f64> = if face_spacing > 1.0 {
-        let planar = surface.mesh.planar_triangles();
-        planar
-            .iter()
+    // Each triangle's minimum distance, relative to the rows' (a planar face's holds
+    // `face_spacing^2` times fewer points per area), and the rows' minimum distance `r0`
+    // that keeps the count near `target`.
+    let (spread, r0) = if face_spacing > 1.0 {
+        let spread: Vec<f64> = (surface.mesh.planar_triangles().iter())
             .map(|&p| if p { face_spacing } else { 1.0 })
-            .collect()
-    } else {
-        vec![1.0; surface.mesh.triangles.len()]
-    };
-    // The area the fill covers at the rows' spacing, so that the count stays near `target`.
-    let filled_area: f64 = (surface.mesh.triangles.iter().zip(&spread))
-        .map(|(&t, &m)| surface.weighted_area_of(t, density) / (m * m))
-        .sum();
-    let r0 = if face_spacing > 1.0 {
+            .collect();
+        // The area the fill covers at the rows' spacing.
+        let filled_area: f64 = (surface.mesh.triangles.iter().zip(&spread))
+            .map(|(&t, &m)| surface.weighted_area_of(t, density) / (m * m))
+            .sum();
         // Rows beside sparser planes hold points the plane's fill does not make up for:
         // about `length / r0 x (1 - 1 / face_spacing)`, so the count is
         // `a / r0^2 + b / r0`, solved for `r0`.
@@ -215,9 +208,10 @@ fn mesh_vertex(
             length * (1.0 - 1.0 / face_spacing),
             target as f64,
         );
-        (b + (b * b + 4.0 * a * n).sqrt()) / (2.0 * n)
+        (spread, (b + (b * b + 4.0 * a * n).sqrt()) / (2.0 * n))
     } else {
-        (fill_density * filled_area / target as f64).sqrt()
+        let r0 = (fill_density * surface.weighted_area / target as f64).sqrt();
+        (vec![1.0; surface.mesh.triangles.len()], r0)
     };
     let radius = |p: V3| r0 / density.factor(p).sqrt();
     let mut grid = Grid::new(
