@@ -2,6 +2,7 @@
 
 use bounded_data::annotate::{ClassTarget, Colours, Flavour};
 use bounded_data::synth::NoiseDirection;
+use bounded_nn::Decision;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
@@ -222,20 +223,8 @@ pub struct ModelArgs {
     /// probable class. Without it, the model's default, chosen on validation clouds when it
     /// was trained. `bounded eval --sensitivity` scores a choice on labelled clouds; the bench
     /// prints MCC against it for every evaluation set.
-    #[arg(long, value_parser = decision)]
+    #[arg(long)]
     pub sensitivity: Option<Decision>,
-}
-
-/// A decision rule: a sensitivity, or `None` for the most probable class.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Decision(pub Option<f32>);
-
-fn decision(text: &str) -> Result<Decision, String> {
-    match text {
-        "argmax" => Ok(Decision(None)),
-        _ => (text.parse().map(|s| Decision(Some(s))))
-            .map_err(|_| format!("`{text}` is neither a number nor `argmax`")),
-    }
 }
 
 /// The positive class of binary scores.

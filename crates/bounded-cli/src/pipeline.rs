@@ -1,6 +1,6 @@
 //! The detector of the command line's model options, run with a progress bar.
 
-use crate::cli::{Decision, ModelArgs};
+use crate::cli::ModelArgs;
 use crate::progress;
 use anyhow::{Context, Result};
 use bounded_geom::PointCloud;
@@ -26,11 +26,9 @@ pub fn detector(options: &ModelArgs) -> Result<Detector> {
     if *fast {
         detector = detector.first_stage_only().context("--fast")?;
     }
-    detector = match sensitivity {
-        Some(Decision(Some(s))) => detector.with_sensitivity(*s).context("--sensitivity")?,
-        Some(Decision(None)) => detector.most_probable_class(),
-        None => detector,
-    };
+    if let Some(decision) = sensitivity {
+        detector = detector.with_decision(*decision).context("--sensitivity")?;
+    }
     Ok(detector)
 }
 

@@ -7,6 +7,7 @@
 //! network, not a second pass over the cloud.
 
 use std::path::Path;
+use std::str::FromStr;
 use std::time::{Duration, Instant};
 
 use bounded_features::{
@@ -47,6 +48,41 @@ pub struct Detector {
     /// The decision rule asked for ([`Detector::with_sensitivity`],
     /// [`Detector::most_probable_class`]); without one, the model's.
     decision: Option<Option<f32>>,
+}
+
+/// A decision rule as users spell it (`--sensitivity`, Python's `sensitivity=`): a number,
+/// or `argmax` for the most probable class. The number's range is checked by
+/// [`Detector::with_decision`].
+///
+/// ```
+/// use bounded_nn::Decision;
+///
+/// assert_eq!("argmax".parse::<Decision>()?, Decision::MostProbableClass);
+/// assert_eq!("0.6".parse::<Decision>()?, Decision::Sensitivity(0.6));
+/// assert!("most".parse::<Decision>().is_err());
+/// # Ok::<(), bounded_nn::NnError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Decision {
+    /// Every point gets its most probable class.
+    MostProbableClass,
+    /// Sharp where p_sharp reaches 1 - the sensitivity ([`Detector::with_sensitivity`]).
+    Sensitivity(f32),
+}
+
+impl FromStr for Decision {
+    type Err = NnError;
+
+    fn from_str(text: &str) -> Result<Self, NnError> {
+        match text {
+            "argmax" => Ok(Self::MostProbableClass),
+            _ => text.parse().map(Self::Sensitivity).map_err(|_| {
+                NnError::InvalidConfig(format!(
+                    "sensitivity `{text}` is neither a number nor `argmax`"
+                ))
+            }),
+        }
+    }
 }
 
 /// Per-point results of [`Detector::detect`].
@@ -160,6 +196,15 @@ impl Detector {
     pub fn most_probable_class(mut self) -> Self {
         self.decision = Some(None);
         self
+    }
+
+    /// [`with_sensitivity`](Self::with_sensitivity) or
+    /// [`most_probable_class`](Self::most_probable_class), as `decision` names.
+    pub fn with_decision(self, decision: Decision) -> Result<Self, NnError> {
+        match decision {
+            Decision::MostProbableClass => Ok(self.most_probable_class()),
+            Decision::Sensitivity(s) => self.with_sensitivity(s),
+        }
     }
 
     /// The sensitivity this detector decides at (`None`: the most probable class).

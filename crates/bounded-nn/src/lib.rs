@@ -56,7 +56,7 @@ pub mod training;
 pub use backend::cpu_device;
 pub use calibration::Reliability;
 pub use data::{Dataset, Sampling};
-pub use detector::{Detection, Detector, Work, class_at};
+pub use detector::{Decision, Detection, Detector, Work, class_at};
 pub use error::NnError;
 pub use file::{FORMAT_VERSION, ModelFile, Provenance};
 pub use fit::{FeatureSet, Schedule, Seconds, Step, TrainingCloud, Widths, fit, fit_stages};

@@ -3,7 +3,7 @@
 
 use bounded_features::{extract, extract_in_context};
 use bounded_geom::{Class, PointCloud, uniform_stream};
-use bounded_nn::{Classifier, Detector, N_CLASSES, argmax, class_at, default_model};
+use bounded_nn::{Classifier, Decision, Detector, N_CLASSES, argmax, class_at, default_model};
 use std::path::Path;
 
 /// The embedded model's probabilities by two full passes.
@@ -117,7 +117,25 @@ fn the_first_stage_alone_and_the_sensitivity() {
     }
     for bad in [0.0, 1.0, -0.5, f32::NAN] {
         assert!(Detector::embedded().unwrap().with_sensitivity(bad).is_err());
+        let decision = Decision::Sensitivity(bad);
+        assert!(
+            Detector::embedded()
+                .unwrap()
+                .with_decision(decision)
+                .is_err()
+        );
     }
+    // A decision as users spell it sets the same rule as the call it names.
+    let with = |text: &str| {
+        let decision = text.parse::<Decision>().unwrap();
+        Detector::embedded()
+            .unwrap()
+            .with_decision(decision)
+            .unwrap()
+    };
+    assert_eq!(with("argmax").sensitivity(), None);
+    assert_eq!(with("0.3").sensitivity(), Some(0.3));
+    assert!("0.3x".parse::<Decision>().is_err());
 }
 
 #[test]

@@ -3,9 +3,8 @@
 
 use crate::errors;
 use bounded_geom::Class;
-use bounded_nn::{Classifier, Detector};
+use bounded_nn::{Classifier, Decision, Detector};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -111,16 +110,15 @@ impl Model {
         if fast {
             detector = detector.first_stage_only().map_err(errors::value)?;
         }
-        Ok(match sensitivity {
-            Some(Sensitivity::Value(s)) => detector.with_sensitivity(s).map_err(errors::value)?,
-            Some(Sensitivity::Name(name)) if name == "argmax" => detector.most_probable_class(),
-            Some(Sensitivity::Name(name)) => {
-                return Err(PyValueError::new_err(format!(
-                    "sensitivity {name:?} is neither a number nor 'argmax'"
-                )));
-            }
-            None => detector,
-        })
+        let decision = match sensitivity {
+            Some(Sensitivity::Value(s)) => Some(Decision::Sensitivity(s)),
+            Some(Sensitivity::Name(name)) => Some(name.parse().map_err(errors::value)?),
+            None => None,
+        };
+        match decision {
+            Some(decision) => detector.with_decision(decision).map_err(errors::value),
+            None => Ok(detector),
+        }
     }
 }
 

@@ -165,7 +165,7 @@ def test_too_few_points_says_how_many(box):
         ({"scales": [16, 32, 64, 128]}, "strictly descending"),
         ({"sensitivity": 1.5}, "sensitivity 1.5 is not strictly between 0 and 1"),
         ({"sensitivity": 0.0}, "sensitivity 0 is not strictly between 0 and 1"),
-        ({"sensitivity": "most"}, "sensitivity \"most\" is neither a number nor 'argmax'"),
+        ({"sensitivity": "most"}, "sensitivity `most` is neither a number nor `argmax`"),
         ({"threads": 0}, "threads must be at least 1"),
     ],
 )
