@@ -111,14 +111,11 @@ impl Model {
             detector = detector.first_stage_only().map_err(errors::value)?;
         }
         let decision = match sensitivity {
-            Some(Sensitivity::Value(s)) => Some(Decision::Sensitivity(s)),
-            Some(Sensitivity::Name(name)) => Some(name.parse().map_err(errors::value)?),
-            None => None,
+            Some(Sensitivity::Value(s)) => Decision::Sensitivity(s),
+            Some(Sensitivity::Name(name)) => name.parse().map_err(errors::value)?,
+            None => return Ok(detector),
         };
-        match decision {
-            Some(decision) => detector.with_decision(decision).map_err(errors::value),
-            None => Ok(detector),
-        }
+        detector.with_decision(decision).map_err(errors::value)
     }
 }
 
