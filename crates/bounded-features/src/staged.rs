@@ -116,8 +116,7 @@ fn staged(
                 // The context reads the first stage of every neighbour, which read its own
                 // neighbours: the point's reach plus the largest of theirs (entries the
                 // context has just read).
-                let widest = (row.iter()).fold(0.0, |w, &q| results[q as usize].radius.max(w));
-                *reach = own + widest;
+                *reach = own + widest(row, results);
             });
         second(&output);
         p
@@ -209,6 +208,22 @@ impl Classified {
     fn is_done(self) -> bool {
         self.radius >= 0.0
     }
+}
+
+/// The largest radius of the `results` that `row` names (all classified, so none negative).
+/// Eight running maxima instead of one: a single one waits on the last comparison at every
+/// neighbour, and the fold took ~3.5% of two-stage detection (1M cube, perf). The maximum
+/// is exact, so the order of the comparisons does not change it.
+fn widest(row: &[u32], results: &[Classified]) -> f32 {
+    let mut lanes = [0.0f32; 8];
+    let mut rows = row.chunks_exact(8);
+    for eight in &mut rows {
+        for (lane, &q) in lanes.iter_mut().zip(eight) {
+            *lane = lane.max(results[q as usize].radius);
+        }
+    }
+    let rest = (rows.remainder().iter()).fold(0.0f32, |w, &q| w.max(results[q as usize].radius));
+    lanes.into_iter().fold(rest, f32::max)
 }
 
 /// The first-stage results beside the points, both by Morton position.
