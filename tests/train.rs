@@ -100,6 +100,7 @@ fn a_context_model_labels_with_its_second_stage() {
     let config = FeatureConfig {
         scales: vec![32, 16],
         groups: FeatureGroups::BOUNDED,
+        ..FeatureConfig::default()
     };
     let classifier = Classifier::from_file(file.clone()).unwrap();
     let mut first = vec![[0f32; 3]; cloud.len()];

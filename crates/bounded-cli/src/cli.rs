@@ -160,6 +160,11 @@ pub struct TrainArgs {
     /// clouds; detection then takes about twice as long.
     #[arg(long)]
     pub context: bool,
+    /// With --context, the second network also reads where the first network's sharp
+    /// probability lies as a line (its linearity, and the point's distance across and along
+    /// it, per scale): one more 3x3 eigen problem per point and scale when detecting.
+    #[arg(long, requires = "context")]
+    pub context_line: bool,
     /// Validation clouds, given as `--data` is and never trained on, on which the default
     /// decision is chosen and recorded in the model (the sensitivity of the highest median
     /// MCC, or the most probable class). Repeat to combine; without it, the most probable class.

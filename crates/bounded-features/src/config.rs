@@ -1,6 +1,6 @@
 //! Which scales and which feature groups to compute.
 
-use crate::FeatureError;
+use crate::{ContextSet, FeatureError};
 
 /// The paper's default scales (neighbour counts), largest first.
 pub const DEFAULT_SCALES: [usize; 4] = [128, 64, 32, 16];
@@ -129,7 +129,7 @@ impl Default for FeatureGroups {
     }
 }
 
-/// Scales and feature groups of an extraction.
+/// Scales, feature groups and context of an extraction.
 ///
 /// Scales are neighbour counts (the point itself included), strictly descending:
 /// the first is `k0`, whose frame and normal the `c` features use.
@@ -139,6 +139,8 @@ pub struct FeatureConfig {
     pub scales: Vec<usize>,
     /// Feature groups computed at every scale.
     pub groups: FeatureGroups,
+    /// The context values beside each scale's features, in an extraction in context.
+    pub context: ContextSet,
 }
 
 impl Default for FeatureConfig {
@@ -146,6 +148,7 @@ impl Default for FeatureConfig {
         Self {
             scales: DEFAULT_SCALES.to_vec(),
             groups: FeatureGroups::BOUNDED,
+            context: ContextSet::Neighbourhood,
         }
     }
 }
@@ -160,7 +163,11 @@ impl FeatureConfig {
             .rev()
             .map(|j| 2f64.powf(3.0 + 4.0 * j as f64 / count as f64).round() as usize)
             .collect();
-        let config = Self { scales, groups };
+        let config = Self {
+            scales,
+            groups,
+            context: ContextSet::Neighbourhood,
+        };
         config.validate()?;
         Ok(config)
     }
@@ -266,6 +273,7 @@ mod tests {
         let with = |scales: Vec<usize>| FeatureConfig {
             scales,
             groups: FeatureGroups::BOUNDED,
+            ..FeatureConfig::default()
         };
         assert!(with(vec![]).validate().is_err());
         assert!(with(vec![16, 32]).validate().is_err());

@@ -3,7 +3,7 @@
 use bounded_geom::{Distinct, GeomError, KnnIndex, NeighbourChunk, PointCloud};
 use rayon::prelude::*;
 
-use crate::context::{CONTEXT_PER_SCALE, FirstResults, Probabilities, contexts};
+use crate::context::{FirstResults, Probabilities, contexts};
 use crate::local::{LANES, Scratch, group_features};
 use crate::{FeatureConfig, FeatureError};
 
@@ -115,9 +115,9 @@ pub fn extract(cloud: &PointCloud, config: &FeatureConfig) -> Result<Features, F
     dense(cloud, config, None)
 }
 
-/// [`extract`] with the [context](crate::CONTEXT_NAMES) of a first classifier's
+/// [`extract`] with the [context](crate::ContextSet) (`config.context`) of a first classifier's
 /// `probabilities` (non-edge, sharp, boundary per point, in cloud order): per scale, the
-/// scale's features followed by its [`CONTEXT_PER_SCALE`] context values.
+/// scale's features followed by its context values.
 pub fn extract_in_context(
     cloud: &PointCloud,
     config: &FeatureConfig,
@@ -128,7 +128,11 @@ pub fn extract_in_context(
 
 /// Values per scale of an extraction, with or without context.
 pub fn values_per_scale(config: &FeatureConfig, in_context: bool) -> usize {
-    let context = if in_context { CONTEXT_PER_SCALE } else { 0 };
+    let context = if in_context {
+        config.context.count()
+    } else {
+        0
+    };
     config.features_per_scale() + context
 }
 
@@ -357,8 +361,14 @@ pub(crate) fn in_context_row(
     for (out, features) in (out.chunks_exact_mut(stride)).zip(features.chunks_exact(per_scale)) {
         out[..per_scale].copy_from_slice(features);
     }
-    contexts(row, &config.scales, first, |scale, values| {
-        let at = scale * stride + per_scale;
-        out[at..at + CONTEXT_PER_SCALE].copy_from_slice(&values);
-    });
+    contexts(
+        row,
+        &config.scales,
+        config.context,
+        first,
+        |scale, values| {
+            let at = scale * stride + per_scale;
+            out[at..at + values.len()].copy_from_slice(values);
+        },
+    );
 }

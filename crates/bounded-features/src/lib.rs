@@ -20,9 +20,9 @@
 //!   and `d` is zero when either set is empty.
 //!
 //! For a second classifier (auto-context), [`extract_in_context`] and
-//! [`extract_chunks_in_context`] put beside each scale's features [`CONTEXT_PER_SCALE`] values
-//! describing a first classifier's probabilities over the same neighbourhood
-//! ([`CONTEXT_NAMES`]).
+//! [`extract_chunks_in_context`] put beside each scale's features values describing a first
+//! classifier's probabilities over the same neighbourhood ([`ContextSet`]: the four of
+//! [`CONTEXT_NAMES`], or those and where the sharp probability lies as a line).
 //!
 //! Results are bit-identical whatever the chunk size and thread count. Translating,
 //! rotating or scaling a cloud changes its `f32` coordinates by rounding only; the
@@ -38,7 +38,11 @@
 //!     .map(|i| [1000.0 + (i % 12) as f64, 2000.0 + (i / 12) as f64, 5.0])
 //!     .collect();
 //! let cloud = PointCloud::from_f64(&positions).unwrap();
-//! let config = FeatureConfig { scales: vec![32, 16], groups: FeatureGroups::BOUNDED };
+//! let config = FeatureConfig {
+//!     scales: vec![32, 16],
+//!     groups: FeatureGroups::BOUNDED,
+//!     ..FeatureConfig::default()
+//! };
 //! let features = extract(&cloud, &config).unwrap();
 //!
 //! // Point 78 = (6, 6): 2 scales x 12 values; on a plane it has no offset along the
@@ -58,7 +62,7 @@ mod staged;
 /// The point cloud type the features take, re-exported so that this crate alone is enough.
 pub use bounded_geom::{GeomError, PointCloud};
 pub use config::{DEFAULT_SCALES, FeatureConfig, FeatureGroups};
-pub use context::{CONTEXT_NAMES, CONTEXT_PER_SCALE};
+pub use context::{CONTEXT_NAMES, CONTEXT_PER_SCALE, ContextSet};
 pub use error::FeatureError;
 pub use extract::{
     DEFAULT_CHUNK_POINTS, FeatureBlock, Features, extract, extract_chunks,

@@ -25,6 +25,7 @@ fn features(points: &[[f64; 3]]) -> Vec<u32> {
     let config = FeatureConfig {
         scales: vec![32, 16, 8, 4],
         groups: FeatureGroups::BOUNDED,
+        ..FeatureConfig::default()
     };
     let cloud = PointCloud::from_f64(points).unwrap();
     let f = extract(&cloud, &config).unwrap();

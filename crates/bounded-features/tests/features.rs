@@ -22,6 +22,7 @@ fn config(scales: &[usize]) -> FeatureConfig {
     FeatureConfig {
         scales: scales.to_vec(),
         groups: FeatureGroups::BOUNDED,
+        ..FeatureConfig::default()
     }
 }
 
@@ -62,6 +63,7 @@ fn symmetric_grid_exact_values() {
             sigma: true,
             ..FeatureGroups::BOUNDED
         },
+        ..FeatureConfig::default()
     };
     let f = extract(&PointCloud::from_f64(&pts).unwrap(), &cfg).unwrap();
     let x = f.point(4);

@@ -149,6 +149,20 @@ impl Sym3 {
         }
     }
 
+    /// Unit eigenvector of the largest of the matrix' `values` (as
+    /// [`eigenvalues`](Self::eigenvalues) gives them); its sign is arbitrary. When the
+    /// largest is repeated, any unit vector orthogonal to the smallest's eigenvector; when all
+    /// three are equal, `[1, 0, 0]`.
+    pub fn largest_vector(&self, values: [f64; 3]) -> [f64; 3] {
+        let spread = values[0] - values[2];
+        if spread <= 0.0 {
+            return [1.0, 0.0, 0.0];
+        }
+        (self.null_vector(values[0], spread))
+            .or_else(|| self.null_vector(values[2], spread).map(any_orthogonal))
+            .unwrap_or([1.0, 0.0, 0.0])
+    }
+
     /// Unit vector spanning the null space of `A - lambda I`, if that space is one
     /// dimensional (the largest cross product of two rows is not negligible).
     fn null_vector(&self, lambda: f64, spread: f64) -> Option<[f64; 3]> {
@@ -363,6 +377,42 @@ mod tests {
     fn uniform(seed: u64) -> impl FnMut() -> f64 {
         let mut stream = crate::test_stream(seed);
         move || (stream() >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+
+    #[test]
+    fn largest_vector_by_hand_and_when_repeated() {
+        // diag(1, 3, 2): the largest eigenvalue's vector is the y axis.
+        let m = Sym3 {
+            xx: 1.0,
+            yy: 3.0,
+            zz: 2.0,
+            ..Sym3::default()
+        };
+        let v = m.largest_vector(m.eigenvalues());
+        assert!(
+            close(v[1].abs(), 1.0, 1e-12) && close(v[0], 0.0, 1e-12),
+            "{v:?}"
+        );
+        // A rank-one matrix u u^T with u = (1, 2, 2) / 3: its vector is u.
+        let u = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
+        let mut m = Sym3::default();
+        m.add_outer(u);
+        let v = m.largest_vector(m.eigenvalues());
+        assert!(close(dot(u, v).abs(), 1.0, 1e-9), "{v:?}");
+        // Largest repeated, diag(2, 2, 1): any unit vector orthogonal to z.
+        let m = Sym3 {
+            xx: 2.0,
+            yy: 2.0,
+            zz: 1.0,
+            ..Sym3::default()
+        };
+        let v = m.largest_vector(m.eigenvalues());
+        assert!(
+            close(dot(v, v), 1.0, 1e-12) && close(v[2], 0.0, 1e-12),
+            "{v:?}"
+        );
+        // All equal: the x axis.
+        assert_eq!(Sym3::default().largest_vector([0.0; 3]), [1.0, 0.0, 0.0]);
     }
 
     #[test]

@@ -39,6 +39,7 @@ impl CaBaseline {
             let target = FeatureConfig {
                 scales: vec![scale],
                 groups: sigma,
+                ..FeatureConfig::default()
             };
             let sigma_columns = columns(config, &target)?;
             let column = [0, 1, 2].map(|i| sigma_columns[i]);
@@ -110,6 +111,7 @@ mod tests {
                 d: true,
                 ..FeatureGroups::NONE
             },
+            ..FeatureConfig::default()
         };
         let labels = vec![0u8, 1, 0, 2, 1, 0];
         let mut features = Vec::new();

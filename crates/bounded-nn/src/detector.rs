@@ -11,8 +11,8 @@ use std::str::FromStr;
 use std::time::{Duration, Instant};
 
 use bounded_features::{
-    CONTEXT_NAMES, DEFAULT_CHUNK_POINTS, FeatureBlock, FeatureConfig, FeatureGroups,
-    extract_chunks, extract_chunks_staged,
+    ContextSet, DEFAULT_CHUNK_POINTS, FeatureBlock, FeatureConfig, FeatureGroups, extract_chunks,
+    extract_chunks_staged,
 };
 use bounded_geom::{Class, PointCloud};
 
@@ -158,6 +158,7 @@ impl Detector {
         let config = FeatureConfig {
             scales: scales.to_vec(),
             groups: self.config.groups,
+            context: self.config.context,
         };
         config.validate()?;
         self.config = config;
@@ -364,19 +365,28 @@ fn trained_config(classifier: &Classifier) -> Result<FeatureConfig, NnError> {
             file.feature_names.join(", ")
         ))
     })?;
-    if let Some(second) = &file.second_stage {
-        let expected = (file.feature_names.iter().map(String::as_str)).chain(CONTEXT_NAMES);
-        if !expected.eq(second.feature_names.iter().map(String::as_str)) {
-            return Err(NnError::InvalidConfig(format!(
-                "the model's second stage reads [{}], not the first stage's features and the \
-                 context this build computes",
-                second.feature_names.join(", ")
-            )));
+    // The context the second stage reads, by its names after the first stage's features.
+    let context = match &file.second_stage {
+        None => ContextSet::default(),
+        Some(second) => {
+            let reads = |c: &ContextSet| {
+                (file.feature_names.iter().map(String::as_str))
+                    .chain(c.names())
+                    .eq(second.feature_names.iter().map(String::as_str))
+            };
+            *ContextSet::ALL.iter().find(|c| reads(c)).ok_or_else(|| {
+                NnError::InvalidConfig(format!(
+                    "the model's second stage reads [{}], not the first stage's features and a \
+                     context this build computes",
+                    second.feature_names.join(", ")
+                ))
+            })?
         }
-    }
+    };
     let config = FeatureConfig {
         scales: file.scales.clone(),
         groups,
+        context,
     };
     config.validate()?;
     Ok(config)

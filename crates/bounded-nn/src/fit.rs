@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use bounded_features::{
-    CONTEXT_NAMES, FeatureConfig, extract, extract_in_context, values_per_point, values_per_scale,
+    FeatureConfig, extract, extract_in_context, values_per_point, values_per_scale,
 };
 use bounded_geom::{Class, PointCloud};
 
@@ -229,7 +229,7 @@ pub fn fit(
         .with_runs(schedule.runs)
         .with_seed(schedule.seed);
     let trained = train(&data, &train_config, |p| progress(Step::Training(p)))?;
-    let context = (set.in_context.then_some(CONTEXT_NAMES))
+    let context = (set.in_context.then(|| config.context.names()))
         .into_iter()
         .flatten();
     let names = (config.groups.names().into_iter())
@@ -302,12 +302,17 @@ mod tests {
         let full = FeatureConfig {
             scales: vec![16, 8],
             groups,
+            ..FeatureConfig::default()
         };
         let d_only = FeatureGroups {
             sigma: false,
             ..groups
         };
-        let target = |scales: Vec<usize>, groups| FeatureConfig { scales, groups };
+        let target = |scales: Vec<usize>, groups| FeatureConfig {
+            scales,
+            groups,
+            ..FeatureConfig::default()
+        };
         assert_eq!(columns(&full, &target(vec![8], d_only)).unwrap(), [8, 9]);
         assert_eq!(
             columns(&full, &target(vec![16, 8], groups)).unwrap(),

@@ -427,6 +427,7 @@ mod tests {
         let full = FeatureConfig {
             scales: vec![32, 16, 8],
             groups: FeatureGroups::ALL,
+            ..FeatureConfig::default()
         };
         let featured = FeaturedCloud::new(
             "fold".into(),
@@ -439,6 +440,7 @@ mod tests {
         let target = FeatureConfig {
             scales: vec![32, 8],
             groups: FeatureGroups::BOUNDED,
+            ..FeatureConfig::default()
         };
         let columns = crate::fit::columns(&full, &target).unwrap();
         let classifier = Classifier::from_file(crate::file::tests::random_file(2, 12, 3)).unwrap();

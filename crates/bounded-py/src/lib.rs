@@ -145,6 +145,7 @@ fn features<'py>(
     let config = FeatureConfig {
         scales,
         groups: feature_groups(groups)?,
+        ..FeatureConfig::default()
     };
     let features = py
         .detach(|| on_threads(threads, || extract(&cloud, &config)))?

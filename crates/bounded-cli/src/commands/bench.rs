@@ -206,6 +206,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let target = FeatureConfig {
             scales: main.scales.clone(),
             groups,
+            ..FeatureConfig::default()
         };
         report.push_str(&ablation(label, &target, &Widths::default())?);
     }

@@ -5,7 +5,7 @@ use crate::cli::{FeatureGroupArg, NoiseAlong, TrainArgs};
 use crate::progress::{self, FitBars};
 use anyhow::{Context, Result, bail};
 use bounded_data::dataset::TrainingSource;
-use bounded_features::{FeatureConfig, FeatureGroups};
+use bounded_features::{ContextSet, FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 use bounded_nn::calibration::{describe, with_chosen_sensitivity};
 use bounded_nn::{Schedule, Widths, fit_stages};
@@ -33,6 +33,11 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     let config = FeatureConfig {
         scales: args.scales.clone(),
         groups: groups(&args.features)?,
+        context: if args.context_line {
+            ContextSet::WithLine
+        } else {
+            ContextSet::Neighbourhood
+        },
     };
     config.validate()?;
     let defaults = Widths::default();
