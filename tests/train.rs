@@ -5,7 +5,9 @@
 mod common;
 
 use bounded_data::dataset::TrainingSource;
-use bounded_features::{CONTEXT_NAMES, FeatureConfig, FeatureGroups, extract, extract_in_context};
+use bounded_features::{
+    CONTEXT_NAMES, ContextSet, FeatureConfig, FeatureGroups, extract, extract_in_context,
+};
 use bounded_nn::calibration::{Calibration, describe};
 use bounded_nn::{Classifier, Detector, ModelFile, TrainingCloud, class_at};
 use common::{bounded_paths, stderr};
@@ -81,16 +83,32 @@ fn assert_p_sharp(path: &Path, expected: &[[f32; 3]]) {
 
 #[test]
 fn a_context_model_labels_with_its_second_stage() {
+    context_model_labels_with_its_second_stage(ContextSet::Neighbourhood);
+}
+
+#[test]
+fn a_line_context_model_labels_with_its_second_stage() {
+    context_model_labels_with_its_second_stage(ContextSet::WithLine);
+}
+
+fn context_model_labels_with_its_second_stage(context: ContextSet) {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("context.bmodel");
     let options = ["--iterations", "20", "--runs", "1", "--scales", "32,16"];
-    let run = train(&model, &[&options[..], &["--context"]].concat());
+    let flags: &[&str] = match context {
+        ContextSet::Neighbourhood => &["--context"],
+        ContextSet::WithLine => &["--context", "--context-line"],
+    };
+    let run = train(&model, &[&options[..], flags].concat());
     assert!(run.status.success(), "{}", stderr(&run));
     let file = ModelFile::load(&model).unwrap();
     let second = file.second_stage.as_deref().expect("a second stage");
     let names: Vec<&str> = second.feature_names.iter().map(String::as_str).collect();
     assert_eq!(names[..12], FeatureGroups::BOUNDED.names());
-    assert_eq!(names[12..], CONTEXT_NAMES);
+    assert_eq!(names[12..], context.names());
+    assert_eq!(names[12..16], CONTEXT_NAMES);
+    let detector = Detector::new(Classifier::from_file(file.clone()).unwrap()).unwrap();
+    assert_eq!(detector.feature_config().context, context);
 
     // The library's way: first stage, its context, second stage.
     let cloud_path = dir.path().join("box.ply");
@@ -100,7 +118,7 @@ fn a_context_model_labels_with_its_second_stage() {
     let config = FeatureConfig {
         scales: vec![32, 16],
         groups: FeatureGroups::BOUNDED,
-        ..FeatureConfig::default()
+        context,
     };
     let classifier = Classifier::from_file(file.clone()).unwrap();
     let mut first = vec![[0f32; 3]; cloud.len()];

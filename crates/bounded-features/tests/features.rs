@@ -6,7 +6,7 @@
 mod common;
 
 use bounded_features::{
-    CONTEXT_PER_SCALE, FeatureConfig, FeatureError, FeatureGroups, Features, extract,
+    CONTEXT_PER_SCALE, ContextSet, FeatureConfig, FeatureError, FeatureGroups, Features, extract,
     extract_chunks, extract_chunks_staged, extract_in_context,
 };
 use bounded_geom::{GeomError, PointCloud};
@@ -470,14 +470,18 @@ fn staged_equals_two_passes_whatever_the_chunking_and_thread_count() {
     let mut pts = surface(30, 0.02, 11, |x, y| -x.abs() + 0.1 * (0.5 * y).sin());
     pts.extend(pts.clone().iter().step_by(5));
     let cloud = PointCloud::from_f64(&pts).unwrap();
-    let cfg = config(&[32, 8]);
-    let plain = extract(&cloud, &cfg).unwrap();
-    let first: Vec<[f32; 3]> = (0..plain.len())
-        .map(|i| stand_in_first_stage(plain.point(i)))
-        .collect();
-    let reference = extract_in_context(&cloud, &cfg, &first).unwrap();
-    let per_point = reference.per_point();
-    for threads in [1, 2, 3] {
+    for (context, threads) in (ContextSet::ALL.into_iter()).flat_map(|c| [(c, 1), (c, 2), (c, 3)]) {
+        let cfg = FeatureConfig {
+            context,
+            ..config(&[32, 8])
+        };
+        let plain = extract(&cloud, &cfg).unwrap();
+        let first: Vec<[f32; 3]> = (0..plain.len())
+            .map(|i| stand_in_first_stage(plain.point(i)))
+            .collect();
+        let reference = extract_in_context(&cloud, &cfg, &first).unwrap();
+        let per_point = reference.per_point();
+        assert_eq!(per_point, 2 * (12 + context.count()));
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -513,7 +517,7 @@ fn staged_equals_two_passes_whatever_the_chunking_and_thread_count() {
                 got.iter()
                     .zip(reference.as_slice())
                     .all(|(a, b)| a.to_bits() == b.to_bits()),
-                "threads {threads}, chunk {chunk}"
+                "{context:?}, threads {threads}, chunk {chunk}"
             );
             // Small chunks overflow the window of waiting chunks; one chunk never waits.
             if chunk <= 7 {
