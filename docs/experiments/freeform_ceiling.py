@@ -4,8 +4,8 @@ beside them (`--quadric`), then with the context the second stage sees (the mean
 of the first classifier's p_sharp over the 16, 32 and 64 nearest points, and the point's
 p_sharp less each mean; on the training clouds from two folds by cloud), and then with that
 context and one of the sharp-line variants of `VARIANTS` (`--line`, `--line-geometry`,
-`--line-means`, `--line-means-64`, `--line-geometry-128`, `--line-geometry-64`). Median ROC
-AUC, MCC at argmax and best MCC over thresholds 0.05-0.95 on each validation directory.
+`--line-means`, `--line-means-64`). Median ROC AUC, MCC at argmax and best MCC over
+thresholds 0.05-0.95 on each validation directory.
 
 Usage: python3 freeform_ceiling.py TRAIN_DIR VAL_DIR[,VAL_DIR...] [--quadric] [--line...]
 (directories written by bounded-nn's feature_dump example; needs numpy, scipy and
@@ -97,8 +97,6 @@ VARIANTS = {
     'line-geometry': dict(scales=(32, 64, 128), means=False),
     'line-means': dict(scales=(32, 64, 128), geometry=False),
     'line-means-64': dict(scales=(64,), geometry=False),
-    'line-geometry-128': dict(scales=(128,), means=False),
-    'line-geometry-64': dict(scales=(64,), means=False),
 }
 
 def fit(parts):
