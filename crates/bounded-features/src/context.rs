@@ -136,12 +136,7 @@ pub(crate) fn contexts(
                 centroid[a] += sd[a];
             }
             if line {
-                moments.xx += sd[0] * d[0];
-                moments.xy += sd[0] * d[1];
-                moments.xz += sd[0] * d[2];
-                moments.yy += sd[1] * d[1];
-                moments.yz += sd[1] * d[2];
-                moments.zz += sd[2] * d[2];
+                moments.add_weighted_outer(s, d);
             }
         }
         summed = k;

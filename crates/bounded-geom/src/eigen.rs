@@ -54,12 +54,20 @@ impl Sym3 {
     /// Adds the outer product `q q^T`: the step of a covariance or scatter-matrix sum.
     #[inline]
     pub fn add_outer(&mut self, q: [f64; 3]) {
-        self.xx += q[0] * q[0];
-        self.xy += q[0] * q[1];
-        self.xz += q[0] * q[2];
-        self.yy += q[1] * q[1];
-        self.yz += q[1] * q[2];
-        self.zz += q[2] * q[2];
+        // Multiplying by 1 is exact, and folded away.
+        self.add_weighted_outer(1.0, q);
+    }
+
+    /// Adds `w q q^T`: the step of a weighted covariance sum.
+    #[inline]
+    pub fn add_weighted_outer(&mut self, w: f64, q: [f64; 3]) {
+        let wq = q.map(|v| w * v);
+        self.xx += wq[0] * q[0];
+        self.xy += wq[0] * q[1];
+        self.xz += wq[0] * q[2];
+        self.yy += wq[1] * q[1];
+        self.yz += wq[1] * q[2];
+        self.zz += wq[2] * q[2];
     }
 
     /// The matrix' rows.
