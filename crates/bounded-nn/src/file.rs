@@ -72,8 +72,8 @@ pub struct ModelFile {
     pub layers: Vec<LayerWeights>,
     /// An optional second network (auto-context), whose probabilities are the model's output.
     /// Its inputs per scale are this network's features followed by the context of this
-    /// network's probabilities over the same neighbourhood (`bounded-features`'
-    /// `CONTEXT_NAMES`); its scales are this one's.
+    /// network's probabilities over the same neighbourhood (one of `bounded-features`'
+    /// `ContextSet`s, which its feature names say); its scales are this one's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub second_stage: Option<Box<ModelFile>>,
     /// The decision rule of the model's output, chosen on validation clouds when it was
