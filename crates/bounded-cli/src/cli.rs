@@ -157,7 +157,8 @@ pub struct TrainArgs {
     pub hidden_widths: Option<Vec<usize>>,
     /// Also train a second network (auto-context) on each scale's features beside the first
     /// network's probabilities over the same neighbourhood: better on randomly sampled, noisy
-    /// clouds; detection then takes about twice as long.
+    /// clouds; detection then takes about 1.2x as long (one neighbour search and one feature
+    /// pass serve both networks; docs/performance.md).
     #[arg(long)]
     pub context: bool,
     /// With --context, the second network also reads where the first network's sharp
@@ -219,8 +220,8 @@ pub struct ModelArgs {
     #[arg(long, value_delimiter = ',')]
     pub scales: Option<Vec<usize>>,
     /// Run only the first network of a two-stage model (the embedded model has two): about
-    /// twice as fast, with the first network's lower quality on noisy and randomly sampled
-    /// clouds.
+    /// 1.2x as fast (docs/performance.md), with the first network's lower quality on noisy
+    /// and randomly sampled clouds.
     #[arg(long)]
     pub fast: bool,
     /// How readily a point is called a sharp edge, strictly between 0 and 1: sharp where
