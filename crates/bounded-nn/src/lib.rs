@@ -92,7 +92,7 @@ mod tests {
         let second = classifier
             .second_stage()
             .expect("an auto-context second stage");
-        assert_eq!(second.file().feature_names.len(), 12 + 4);
-        assert_eq!(second.file().model.n_params(), 1787);
+        assert_eq!(second.file().feature_names.len(), 12 + 7);
+        assert_eq!(second.file().model.n_params(), 1931);
     }
 }

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bounded
-from conftest import REPO, cli_detect, run_cli
+from conftest import REPO, cli_detect, open_box, run_cli
 
 DEFAULT_MODEL = REPO / "crates" / "bounded-nn" / "models" / "default.bmodel"
 
@@ -68,9 +68,19 @@ def test_result_arrays_and_class_codes(box):
     )
     # The open box: a crease where the floor meets a wall, a rim around the opening.
     crease = (box[:, 2] < 0.05) & (box[:, 1] < 0.05)
-    rim = box[:, 2] > 1.95
     assert (result.classes[crease] == bounded.SHARP).mean() > 0.3
-    assert (result.classes[rim] == bounded.BOUNDARY).mean() > 0.3
+    # The rim of a sparse, uniformly drawn sheet is the hardest boundary: over 20 such boxes,
+    # three training seeds of one recipe find 16-53% of it, and one box can fall to 4%
+    # (docs/model.md, 2026-12-05), so it is pooled over five boxes: some of the rim is
+    # found, and the boundary points lie at the rim (within about a spacing, 0.12).
+    found, at_rim = [], []
+    for seed in range(5):
+        xyz = open_box(seed=seed)
+        classes = bounded.detect(xyz).classes
+        found.append(classes[xyz[:, 2] > 1.95] == bounded.BOUNDARY)
+        at_rim.append(xyz[classes == bounded.BOUNDARY, 2] > 2 - 0.12)
+    assert np.concatenate(found).mean() > 0.1
+    assert np.concatenate(at_rim).mean() > 0.75
     middle = (np.abs(box[:, 0] - 2) < 1) & (np.abs(box[:, 1] - 1.5) < 0.7) & (box[:, 2] == 0)
     assert (result.classes[middle] == bounded.NON_EDGE).all()
 

@@ -13,7 +13,7 @@ use bounded_data::LabelledCloud;
 use bounded_data::peers;
 use bounded_data::picture::{Canvas, PALETTE, Series, View, precision_recall, render_classes};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind, recipe};
-use bounded_features::{FeatureConfig, FeatureGroups};
+use bounded_features::{ContextSet, FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 use bounded_nn::baseline::CaBaseline;
 use bounded_nn::calibration::{Calibration, describe, sensitivity_table, with_chosen_sensitivity};
@@ -81,7 +81,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let training = recipe::generate(&recipe::TRAINING_SETS, if args.quick { 4 } else { 1 })?;
 
     let full = FeatureConfig::ablation(16, FeatureGroups::ALL)?;
-    let main = FeatureConfig::default();
+    // The embedded recipe's second stage reads the line context (docs/model.md, 2026-12-05).
+    let main = FeatureConfig {
+        context: ContextSet::WithLine,
+        ..FeatureConfig::default()
+    };
     let mut report = String::from("# BoundED-rs bench\n\n");
     let _ = writeln!(
         report,
@@ -192,7 +196,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // 4: ablations; the configuration of the main model reuses it instead of retraining.
     let ablation = |label: &str, target: &FeatureConfig, widths: &Widths| -> Result<String> {
         let ablated;
-        let model = if *target == main && *widths == Widths::default() {
+        // Single-stage: the context does not matter.
+        let same = target.scales == main.scales && target.groups == main.groups;
+        let model = if same && *widths == Widths::default() {
             &first_stage
         } else {
             ablated = trained(&train_full, &full, target, &ablation_schedule, widths)?;
