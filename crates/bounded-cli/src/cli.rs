@@ -157,7 +157,7 @@ pub struct TrainArgs {
     pub hidden_widths: Option<Vec<usize>>,
     /// Also train a second network (auto-context) on each scale's features beside the first
     /// network's probabilities over the same neighbourhood: better on randomly sampled, noisy
-    /// clouds; detection then takes about 1.2x as long (one neighbour search and one feature
+    /// clouds; detection then takes about 1.2-1.4x as long (one neighbour search and one feature
     /// pass serve both networks; docs/performance.md).
     #[arg(long)]
     pub context: bool,
@@ -220,7 +220,7 @@ pub struct ModelArgs {
     #[arg(long, value_delimiter = ',')]
     pub scales: Option<Vec<usize>>,
     /// Run only the first network of a two-stage model (the embedded model has two): about
-    /// 1.2x as fast (docs/performance.md), with the first network's lower quality on noisy
+    /// 1.2-1.4x as fast (docs/performance.md), with the first network's lower quality on noisy
     /// and randomly sampled clouds.
     #[arg(long)]
     pub fast: bool,
