@@ -412,11 +412,11 @@ mod tests {
             ("generated:cad:1:2:faces=0.5", "face spacing 0.5"),
             (
                 "generated:freeform:1:2:3",
-                "\"3\" is not depth=, angle=, band=, noise= or faces= a number",
+                "\"3\" is not depth=, angle=, band=, noise=, faces= or shallow= a number",
             ),
             (
                 "generated:freeform:1:2:depth=x",
-                "\"depth=x\" is not depth=, angle=, band=, noise= or faces= a number",
+                "\"depth=x\" is not depth=, angle=, band=, noise=, faces= or shallow= a number",
             ),
             ("generated:freeform:1:2:band=0", "label band 0"),
             (

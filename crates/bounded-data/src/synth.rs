@@ -2,7 +2,7 @@
 //!
 //! Every shape is a triangle mesh whose feature edges come from its geometry: an edge used
 //! by one triangle is a border (boundary class), an edge whose faces deviate from flat by
-//! more than 18 degrees is a sharp crease. Finely tessellated smooth parts (cylinders,
+//! more than 10 degrees is a sharp crease. Finely tessellated smooth parts (cylinders,
 //! spheres, tori, fillets) stay non-edge. Shapes get a random rotation, scale and
 //! anisotropic stretch of up to 1.25 per axis before their features are extracted, then are
 //! sampled in one of two [`Sampling`] modes (see there for the label rules), and perturbed by
@@ -112,6 +112,8 @@ impl SetKind {
             S::Cone | S::Sphere | S::Torus => 0.7,
             S::FoldedSheet | S::OpenBox => 0.5,
             S::Disc | S::PolygonSheet | S::Tube | S::Bowl | S::ThinPlate => 0.3,
+            // Only by a set's own weight (`SetConfig::shallow`).
+            S::ShallowRidges => return 0.0,
         };
         match self {
             SetKind::Cad => cad,
@@ -170,7 +172,15 @@ pub struct SetConfig {
     /// rows' spacing: each such shape draws its [`ShapeSpec::face_spacing`] uniformly from 1
     /// to this (at most [`MAX_FACE_SPACING`]; 1, the default, fills every face alike).
     pub face_spacing: f64,
+    /// The weight of [`ShapeKind::ShallowRidges`] among the mesh kinds' shapes, whose weights
+    /// sum to about 30 in the CAD sets (0, the default, draws none and leaves every other
+    /// draw of a set as it was; 30 makes about half the shapes shallow ridges).
+    pub shallow: f64,
 }
+
+/// The largest [`SetConfig::shallow`]: a set of nothing but shallow ridges teaches nothing
+/// of the other creases.
+pub const MAX_SHALLOW: f64 = 1000.0;
 
 /// The largest [`SetConfig::face_spacing`]: sparser planes hold almost no points between
 /// their crease rows.
@@ -192,6 +202,7 @@ impl SetConfig {
             outlier_fraction: 0.002,
             label_rule: LabelRule::default(),
             face_spacing: 1.0,
+            shallow: 0.0,
         }
     }
 
@@ -210,6 +221,15 @@ impl SetConfig {
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
         check_outlier_fraction(self.outlier_fraction)?;
         check_face_spacing(self.face_spacing)?;
+        if !(0.0..=MAX_SHALLOW).contains(&self.shallow) {
+            return Err(DataError::Generator {
+                what: format!(
+                    "shallow ridges' weight {}: 0 to {MAX_SHALLOW} (the other shapes' sum to \
+                     about 30)",
+                    self.shallow
+                ),
+            });
+        }
         self.label_rule.validate()
     }
 
@@ -280,12 +300,16 @@ impl SetConfig {
 
     /// A mesh shape: the kind by the set's weights, then sampling, points, noise, outliers.
     fn mesh_spec(&self, rng: &mut ChaCha8Rng) -> ShapeSpec {
-        let total: f64 = ShapeKind::ALL.iter().map(|&s| self.kind.weight(s)).sum();
+        let weight = |s: ShapeKind| match s {
+            ShapeKind::ShallowRidges if self.kind != SetKind::Freeform => self.shallow,
+            _ => self.kind.weight(s),
+        };
+        let total: f64 = ShapeKind::ALL.iter().map(|&s| weight(s)).sum();
         let mut pick = rng.random::<f64>() * total;
         let kind = ShapeKind::ALL
             .into_iter()
             .find(|&s| {
-                pick -= self.kind.weight(s);
+                pick -= weight(s);
                 pick < 0.0
             })
             .unwrap_or(ShapeKind::Box);
@@ -537,15 +561,15 @@ impl SetConfig {
     /// This set with `options`, each `NAME=NUMBER`, checked: for the free-form kind the
     /// label rules `depth=`, `angle=`, `band=` and `noise=` (its [`LabelRule`]'s
     /// `min_depth`, `min_angle`, `band` and `min_depth_per_noise`); for the mesh kinds
-    /// `faces=` ([`face_spacing`](Self::face_spacing)). An option of the other kinds is
-    /// refused.
+    /// `faces=` ([`face_spacing`](Self::face_spacing)) and `shallow=`
+    /// ([`shallow`](Self::shallow)). An option of the other kinds is refused.
     pub fn with_options(mut self, options: &[&str]) -> Result<SetConfig, DataError> {
         let bad = |what: String| DataError::Generator { what };
         let freeform = self.kind == SetKind::Freeform;
         for option in options {
             let not_an_option = || {
                 bad(format!(
-                    "{option:?} is not depth=, angle=, band=, noise= or faces= a number"
+                    "{option:?} is not depth=, angle=, band=, noise=, faces= or shallow= a number"
                 ))
             };
             let (name, value) = option.split_once('=').ok_or_else(not_an_option)?;
@@ -557,6 +581,7 @@ impl SetConfig {
                 "band" => (&mut label.band, true),
                 "noise" => (&mut label.min_depth_per_noise, true),
                 "faces" => (&mut self.face_spacing, false),
+                "shallow" => (&mut self.shallow, false),
                 _ => return Err(not_an_option()),
             };
             if for_freeform != freeform {
@@ -801,6 +826,47 @@ mod tests {
         assert!(set.validate().is_ok());
         set.noise_levels = vec![0.2, -1.0];
         assert!(matches!(generate(&set), Err(DataError::Generator { .. })));
+    }
+
+    #[test]
+    fn shallow_ridges_only_where_asked_for() {
+        let plain = small(SetKind::Cad, 9, 40);
+        let shallow = SetConfig {
+            shallow: 30.0,
+            ..plain.clone()
+        };
+        let kinds = |set: &SetConfig| -> Vec<ShapeKind> {
+            (0..set.shapes)
+                .map(|i| match set.spec(i) {
+                    CloudSpec::Mesh(s) => s.kind,
+                    CloudSpec::Freeform(_) => panic!("a mesh kind gives mesh shapes"),
+                })
+                .collect()
+        };
+        assert!(!kinds(&plain).contains(&ShapeKind::ShallowRidges));
+        let drawn = (kinds(&shallow).iter())
+            .filter(|&&k| k == ShapeKind::ShallowRidges)
+            .count();
+        // About half at a weight of 30 (the CAD weights sum to 30.6).
+        assert!((10..=30).contains(&drawn), "{drawn} of 40");
+        // Their clouds hold sharp points on the shallow creases.
+        let i = (kinds(&shallow).iter())
+            .position(|&k| k == ShapeKind::ShallowRidges)
+            .unwrap();
+        let CloudSpec::Mesh(spec) = shallow.spec(i) else {
+            unreachable!()
+        };
+        let c = generate_shape(&spec).unwrap();
+        assert!(c.class_counts()[Class::Sharp as usize] > 0);
+        // The option is a mesh kind's, and bounded.
+        let parsed = SetConfig::new(SetKind::Random, 1, 2).with_options(&["shallow=5"]);
+        assert_eq!(parsed.unwrap().shallow, 5.0);
+        for bad in ["shallow=-1", "shallow=1e9"] {
+            let set = SetConfig::new(SetKind::Cad, 1, 2).with_options(&[bad]);
+            assert!(matches!(set, Err(DataError::Generator { .. })), "{bad}");
+        }
+        let freeform = SetConfig::new(SetKind::Freeform, 1, 2).with_options(&["shallow=5"]);
+        assert!(freeform.is_err());
     }
 
     #[test]

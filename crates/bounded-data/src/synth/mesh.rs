@@ -8,11 +8,18 @@
 use super::grid::{Grid, bounds};
 use bounded_geom::vec3::{V3, cross, dot, norm, normalize, scale, sub};
 
-/// Two faces meeting at more than this deviation from flat (degrees) form a sharp crease.
+/// Two faces meeting at more than this deviation from flat (degrees) form a sharp crease:
+/// issue 31 asks for creases down to about 10 degrees.
 ///
-/// Shapes keep smooth parts below ~8 degrees per edge and real creases above ~25 degrees, so
-/// no label depends on which side of the threshold a rounding error falls.
-pub(crate) const SHARP_DEVIATION_DEG: f64 = 18.0;
+/// Shapes keep smooth parts below ~8 degrees per edge (arcs of at most 6 degrees, stretched
+/// by up to 1.25) and draw their creases from 12 degrees ([`ShapeKind::ShallowRidges`]) or
+/// 25 degrees (every other kind), so no label depends on which side of the threshold a
+/// rounding error falls. Lowered from 18 on 2026-12-05: every set the project trains and
+/// evaluates on was generated again with both and came out byte-identical (none of their
+/// edges deviates by 10-18 degrees).
+///
+/// [`ShapeKind::ShallowRidges`]: super::ShapeKind::ShallowRidges
+pub(crate) const SHARP_DEVIATION_DEG: f64 = 10.0;
 
 /// Faces deviating from flat by less than this (degrees) across a smooth edge lie in one
 /// plane ([`Mesh::planar_triangles`]): far below the 2-8 degrees a curved surface's
@@ -431,12 +438,12 @@ pub(crate) mod tests {
     fn planar_triangles_are_those_of_flat_faces_not_of_a_curved_one() {
         // A cube's faces are planes, creases between them.
         assert!(cube().planar_triangles().iter().all(|&p| p));
-        // A cylinder of 32 strips (11.25 degrees between strips) on a flat disc, square to
+        // A cylinder of 64 strips (5.6 degrees between strips) on a flat disc, square to
         // it (a crease): the strips are curved, the disc planar.
         let mut m = Mesh::default();
         let ring = |z: f64| {
-            (0..32).map(move |i| {
-                let t = i as f64 / 32.0 * std::f64::consts::TAU;
+            (0..64).map(move |i| {
+                let t = i as f64 / 64.0 * std::f64::consts::TAU;
                 [t.cos(), t.sin(), z]
             })
         };
@@ -446,14 +453,14 @@ pub(crate) mod tests {
         let centre = m.vertex([0.0; 3]);
         m.fan(centre, &bottom);
         let planar = m.welded().planar_triangles();
-        assert_eq!(planar.len(), strips + 32);
+        assert_eq!(planar.len(), strips + 64);
         assert!(planar[..strips].iter().all(|&p| !p), "{planar:?}");
         assert!(planar[strips..].iter().all(|&p| p), "{planar:?}");
     }
 
     #[test]
     fn dihedral_threshold_separates_shallow_and_steep_folds() {
-        for (deg, sharp) in [(10.0_f64, false), (30.0, true), (160.0, true)] {
+        for (deg, sharp) in [(8.0_f64, false), (12.0, true), (30.0, true), (160.0, true)] {
             // Two unit squares folded along the y axis by `deg` degrees from flat.
             let t = deg.to_radians();
             let mut m = Mesh::default();

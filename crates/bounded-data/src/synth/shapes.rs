@@ -70,11 +70,16 @@ pub enum ShapeKind {
     Cup,
     /// A block with narrow ribs and slots along its top (parallel creases close together).
     Ribbed,
+    /// A block whose top folds along 1..4 shallow creases, each deviating 12..25 degrees
+    /// from flat, convex or concave: the low ridges, valleys and slope changes that the
+    /// other kinds (creases from 25 degrees) lack. Drawn only in sets that ask for it
+    /// (`shallow=`, [`SetConfig::shallow`](super::SetConfig::shallow)).
+    ShallowRidges,
 }
 
 impl ShapeKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [ShapeKind; 24] = [
+    pub const ALL: [ShapeKind; 25] = [
         ShapeKind::Box,
         ShapeKind::FractalCube,
         ShapeKind::Stairs,
@@ -99,6 +104,7 @@ impl ShapeKind {
         ShapeKind::Turned,
         ShapeKind::Cup,
         ShapeKind::Ribbed,
+        ShapeKind::ShallowRidges,
     ];
 
     /// Snake-case name, used in generated cloud names.
@@ -128,6 +134,7 @@ impl ShapeKind {
             ShapeKind::Turned => "turned",
             ShapeKind::Cup => "cup",
             ShapeKind::Ribbed => "ribbed",
+            ShapeKind::ShallowRidges => "shallow_ridges",
         }
     }
 
@@ -297,6 +304,12 @@ impl ShapeKind {
                 };
                 revolve(&cup_profile(rng), segments, TAU, false)
             }
+            ShapeKind::ShallowRidges => extrude(
+                &shallow_ridges(rng),
+                rng.random_range(0.3..1.0),
+                true,
+                [true, true],
+            ),
             ShapeKind::Ribbed => {
                 extrude(&ribbed(rng), rng.random_range(0.3..1.0), true, [true, true])
             }
@@ -436,6 +449,54 @@ fn lathe_profile(rng: &mut impl Rng) -> Vec<P2> {
             0.0
         }
     })
+}
+
+/// The least and the largest deviation from flat of a [`ShapeKind::ShallowRidges`] crease
+/// (degrees): above the sharp threshold by more than the stretch of a shape can take away
+/// (12 / 1.25 = 9.6 is the rare exception, labelled by its actual angle), below the 25 of
+/// every other kind.
+const SHALLOW_DEG: [f64; 2] = [12.0, 25.0];
+
+/// The profile of a [`ShapeKind::ShallowRidges`] block: a bottom, two sides, and a top
+/// from `x = w` back to `x = 0` whose slope turns by [`SHALLOW_DEG`] at each of 1..4
+/// creases, up or down, within 30 degrees of level; the top is then raised so that its
+/// lowest point lies a random height above the bottom.
+fn shallow_ridges(rng: &mut impl Rng) -> Vec<P2> {
+    let w: f64 = rng.random_range(0.6..1.2);
+    let creases = rng.random_range(1..=4);
+    // Crease positions, at least a tenth of the width apart and from the sides.
+    let mut xs: Vec<f64> = Vec::new();
+    while xs.len() < creases {
+        let x = rng.random_range(0.1..0.9) * w;
+        if xs.iter().all(|&o: &f64| (o - x).abs() > 0.1 * w) {
+            xs.push(x);
+        }
+    }
+    xs.sort_by(|a, b| b.total_cmp(a));
+    xs.push(0.0);
+    let limit = 30f64.to_radians();
+    let mut slope: f64 = rng.random_range(-0.5 * limit..0.5 * limit);
+    let mut top = vec![[w, 0.0]];
+    for (i, &x) in xs.iter().enumerate() {
+        let [x0, y0] = top[top.len() - 1];
+        top.push([x, y0 + (x0 - x) * slope.tan()]);
+        if i + 1 < xs.len() {
+            // One of the two stays within the limit, as a turn is below it.
+            let turn = rng
+                .random_range(SHALLOW_DEG[0]..SHALLOW_DEG[1])
+                .to_radians();
+            let up = match (slope + turn <= limit, slope - turn >= -limit) {
+                (true, true) => rng.random_bool(0.5),
+                (up, _) => up,
+            };
+            slope += if up { turn } else { -turn };
+        }
+    }
+    let lowest = top.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+    let rise = rng.random_range(0.3..0.7) - lowest;
+    let mut profile = vec![[0.0, 0.0], [w, 0.0]];
+    profile.extend(top.iter().map(|&[x, y]| [x, y + rise]));
+    profile
 }
 
 /// An open polyline with 1..3 folds whose deviation from flat is 25..165 degrees, either
@@ -603,6 +664,46 @@ mod tests {
                     assert!(!f.sharp.is_empty(), "{kind:?} has no sharp edge");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn shallow_ridges_turn_by_12_to_25_degrees_and_every_crease_is_sharp() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for _ in 0..50 {
+            let profile = shallow_ridges(&mut rng);
+            let n = profile.len();
+            // Bottom, right side, 1..4 creases, the left end: 5..8 corners.
+            assert!((5..=8).contains(&n), "{profile:?}");
+            let turn = |i: usize| {
+                let (a, b, c) = (profile[i - 1], profile[i], profile[(i + 1) % n]);
+                let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]]);
+                let cos = (u[0] * v[0] + u[1] * v[1]) / (u[0].hypot(u[1]) * v[0].hypot(v[1]));
+                cos.clamp(-1.0, 1.0).acos().to_degrees()
+            };
+            for i in 3..n - 1 {
+                let t = turn(i);
+                assert!(
+                    (12.0..25.0).contains(&t),
+                    "crease {i} turns {t}: {profile:?}"
+                );
+            }
+            // The top stays above the bottom, the corners are steep.
+            assert!(
+                profile[2..].iter().all(|p| p[1] >= 0.3 - 1e-12),
+                "{profile:?}"
+            );
+            assert!(turn(2) > 50.0 && turn(n - 1) > 50.0, "{profile:?}");
+            // Extruded: every corner of the profile makes a sharp edge along the extrusion,
+            // and both caps' rims are sharp: 3 n sharp edges, in polylines of n + 2 loops or
+            // lines at most (corners turning more than 30 degrees split them).
+            let m = extrude(&profile, 0.5, true, [true, true]).welded();
+            let f = m.features();
+            let segments: usize = (f.sharp.iter())
+                .map(|l| l.points.len() - usize::from(!l.closed))
+                .sum();
+            assert_eq!(segments, 3 * n, "{profile:?}");
+            assert!(f.border.is_empty());
         }
     }
 
