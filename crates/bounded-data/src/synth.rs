@@ -100,8 +100,9 @@ impl SetKind {
         }
     }
 
-    /// Relative frequency of `shape` in this set.
-    fn weight(self, shape: ShapeKind) -> f64 {
+    /// Relative frequency of `shape` in this set, whose shallow ridges weigh `shallow`
+    /// ([`SetConfig::shallow`]).
+    fn weight(self, shape: ShapeKind, shallow: f64) -> f64 {
         use ShapeKind as S;
         let cad = match shape {
             S::FractalCube => 3.0,
@@ -112,8 +113,8 @@ impl SetKind {
             S::Cone | S::Sphere | S::Torus => 0.7,
             S::FoldedSheet | S::OpenBox => 0.5,
             S::Disc | S::PolygonSheet | S::Tube | S::Bowl | S::ThinPlate => 0.3,
-            // Only by a set's own weight (`SetConfig::shallow`).
-            S::ShallowRidges => return 0.0,
+            // In every kind, only as the set asks for them.
+            S::ShallowRidges => return shallow,
         };
         match self {
             SetKind::Cad => cad,
@@ -300,10 +301,7 @@ impl SetConfig {
 
     /// A mesh shape: the kind by the set's weights, then sampling, points, noise, outliers.
     fn mesh_spec(&self, rng: &mut ChaCha8Rng) -> ShapeSpec {
-        let weight = |s: ShapeKind| match s {
-            ShapeKind::ShallowRidges if self.kind != SetKind::Freeform => self.shallow,
-            _ => self.kind.weight(s),
-        };
+        let weight = |s: ShapeKind| self.kind.weight(s, self.shallow);
         let total: f64 = ShapeKind::ALL.iter().map(|&s| weight(s)).sum();
         let mut pick = rng.random::<f64>() * total;
         let kind = ShapeKind::ALL
