@@ -142,9 +142,6 @@ pub struct TrainArgs {
     /// Seed of the first run (run r uses seed + r).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Let the learning rate fall from 1e-3 to 0 along half a cosine over each run.
-    #[arg(long)]
-    pub cosine_decay: bool,
     /// Neighbourhood sizes, largest first.
     #[arg(long, value_delimiter = ',', default_value = "128,64,32,16")]
     pub scales: Vec<usize>,

@@ -104,9 +104,6 @@ pub struct Schedule {
     pub runs: usize,
     /// Seed of the first run.
     pub seed: u64,
-    /// The learning rate falls to 0 along half a cosine over each run
-    /// ([`TrainConfig::cosine_decay`]).
-    pub cosine_decay: bool,
 }
 
 /// Layer widths of the network (see [`ModelConfig`]).
@@ -230,8 +227,7 @@ pub fn fit(
     let train_config = TrainConfig::new(widths.model(config, set.in_context))
         .with_iterations(schedule.iterations)
         .with_runs(schedule.runs)
-        .with_seed(schedule.seed)
-        .with_cosine_decay(schedule.cosine_decay);
+        .with_seed(schedule.seed);
     let trained = train(&data, &train_config, |p| progress(Step::Training(p)))?;
     let context = (set.in_context.then(|| config.context.names()))
         .into_iter()

@@ -26,14 +26,9 @@ pub struct TrainConfig {
     /// Points per batch.
     #[config(default = 16384)]
     pub batch_size: usize,
-    /// Adam learning rate (at the start of each run, with [`cosine_decay`](Self::cosine_decay)).
+    /// Adam learning rate.
     #[config(default = 1e-3)]
     pub learning_rate: f64,
-    /// Let the learning rate fall from `learning_rate` to 0 along half a cosine over each run,
-    /// so that its last weights settle instead of moving at the full rate to the end (SPEC.md:
-    /// constant, the default).
-    #[config(default = false)]
-    pub cosine_decay: bool,
     /// Adam beta 1.
     #[config(default = 0.9)]
     pub beta_1: f32,
@@ -169,7 +164,7 @@ pub fn train(
                 .loss
                 .forward(model.forward_train(x, &mut dropout_rng), y);
             let grads = GradientsParams::from_grads(loss.backward(), &model);
-            model = optim.step(config.rate_at(iteration), model, grads);
+            model = optim.step(config.learning_rate, model, grads);
             let loss = scalar(loss)?;
 
             let validate =
@@ -217,17 +212,6 @@ pub fn train(
         run_val_losses,
         data_hash: data.fingerprint(),
     })
-}
-
-impl TrainConfig {
-    /// The learning rate of iteration `iteration` (1-based) of a run.
-    pub fn rate_at(&self, iteration: usize) -> f64 {
-        if !self.cosine_decay {
-            return self.learning_rate;
-        }
-        let done = (iteration - 1) as f64 / self.iterations as f64;
-        self.learning_rate * 0.5 * (1.0 + (std::f64::consts::PI * done).cos())
-    }
 }
 
 fn check(config: &TrainConfig, data: &Dataset<'_>) -> Result<(), NnError> {
@@ -343,28 +327,6 @@ pub(crate) mod tests {
         assert_eq!(trained.val_loss, min_run);
         assert_eq!(trained.val_loss, trained.run_val_losses[trained.best_run]);
         assert_eq!(trained.data_hash, data.fingerprint());
-    }
-
-    #[test]
-    fn cosine_decay_by_hand_and_in_training() {
-        let config = toy_config().with_iterations(4).with_learning_rate(1.0);
-        assert!((1..=4).all(|i| config.rate_at(i) == 1.0));
-        let decayed = config.with_cosine_decay(true);
-        // 0.5 (1 + cos(pi i / 4)) for i = 0..3.
-        let expected = [1.0, 0.853_553_390_593_273_8, 0.5, 0.146_446_609_406_726_24];
-        for (i, e) in (1..=4).zip(expected) {
-            assert!((decayed.rate_at(i) - e).abs() < 1e-12, "{i}");
-        }
-        // A decayed run still learns the toy set, and trains other weights than a constant one.
-        let (features, labels) = toy_set(3000, 1);
-        let data = Dataset::new(&features, &labels, 4).unwrap();
-        let config = toy_config().with_runs(1);
-        let constant = train(&data, &config, |_| {}).unwrap();
-        let trained = train(&data, &config.with_cosine_decay(true), |_| {}).unwrap();
-        let (test_x, test_y) = toy_set(2000, 2);
-        let acc = accuracy(&trained.model, &test_x, &test_y);
-        assert!(acc > 0.95, "accuracy {acc}");
-        assert_ne!(trained.val_loss, constant.val_loss);
     }
 
     #[test]

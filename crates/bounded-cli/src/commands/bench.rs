@@ -61,7 +61,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         iterations,
         runs,
         seed: 1,
-        cosine_decay: false,
     };
     let ablation_schedule = Schedule {
         runs: 1,

@@ -73,7 +73,6 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         iterations: args.iterations,
         runs: args.runs,
         seed: args.seed,
-        cosine_decay: args.cosine_decay,
     };
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let (file, seconds) = FitBars::around(|progress| {
