@@ -222,15 +222,12 @@ impl SetConfig {
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
         check_outlier_fraction(self.outlier_fraction)?;
         check_face_spacing(self.face_spacing)?;
-        if !(0.0..=MAX_SHALLOW).contains(&self.shallow) {
-            return Err(DataError::Generator {
-                what: format!(
-                    "shallow ridges' weight {}: 0 to {MAX_SHALLOW} (the other shapes' sum to \
-                     about 30)",
-                    self.shallow
-                ),
-            });
-        }
+        check_within(self.shallow, 0.0..=MAX_SHALLOW, || {
+            format!(
+                "shallow ridges' weight {}: 0 to {MAX_SHALLOW} (the other shapes' sum to about 30)",
+                self.shallow
+            )
+        })?;
         self.label_rule.validate()
     }
 
@@ -462,26 +459,33 @@ fn check_noise(level: f64) -> Result<(), DataError> {
     })
 }
 
-/// A face spacing must lie in `1..=MAX_FACE_SPACING`.
-fn check_face_spacing(spacing: f64) -> Result<(), DataError> {
-    if (1.0..=MAX_FACE_SPACING).contains(&spacing) {
+/// `Ok` when `value` lies in `range` (a NaN never does), else the generator's error that
+/// `what` words.
+fn check_within(
+    value: f64,
+    range: RangeInclusive<f64>,
+    what: impl FnOnce() -> String,
+) -> Result<(), DataError> {
+    if range.contains(&value) {
         return Ok(());
     }
-    Err(DataError::Generator {
-        what: format!(
+    Err(DataError::Generator { what: what() })
+}
+
+/// A face spacing must lie in `1..=MAX_FACE_SPACING`.
+fn check_face_spacing(spacing: f64) -> Result<(), DataError> {
+    check_within(spacing, 1.0..=MAX_FACE_SPACING, || {
+        format!(
             "face spacing {spacing}: a multiple of the crease rows' spacing, 1 to \
              {MAX_FACE_SPACING}"
-        ),
+        )
     })
 }
 
 /// An outlier fraction must lie in 0..=1.
 fn check_outlier_fraction(fraction: f64) -> Result<(), DataError> {
-    if (0.0..=1.0).contains(&fraction) {
-        return Ok(());
-    }
-    Err(DataError::Generator {
-        what: format!("outlier fraction {fraction}: a fraction of the points, 0 to 1"),
+    check_within(fraction, 0.0..=1.0, || {
+        format!("outlier fraction {fraction}: a fraction of the points, 0 to 1")
     })
 }
 
