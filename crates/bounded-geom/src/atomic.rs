@@ -115,9 +115,23 @@ pub fn remove_temporaries() {
     registry.closed = true;
     for path in registry.live.drain(..) {
         if std::fs::remove_file(&path).is_err() {
-            let _ = std::fs::remove_dir_all(path);
+            remove_busy_dir(&path);
         }
     }
+}
+
+/// Removes the scratch directory `path` while another thread may still create files in it
+/// by path: renamed aside first (to a name still among the [`stale_temporaries`]), so that
+/// no new file lands in it between `remove_dir_all`'s listing and its `rmdir`, which would
+/// leave it behind.
+fn remove_busy_dir(path: &Path) {
+    let aside = path.with_extension("removed.part");
+    let gone = if std::fs::rename(path, &aside).is_ok() {
+        aside
+    } else {
+        path.to_path_buf()
+    };
+    let _ = std::fs::remove_dir_all(gone);
 }
 
 /// The files in `dir` named like this writer's temporary files (`.bounded-*.part`) that are
