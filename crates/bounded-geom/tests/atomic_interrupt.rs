@@ -27,9 +27,10 @@ fn removing_the_temporaries_deletes_the_live_ones_and_refuses_new_ones() {
             }
         })
     };
-    while made.load(Ordering::Relaxed) < 100 {
+    while made.load(Ordering::Relaxed) < 100 && !filler.is_finished() {
         std::thread::yield_now();
     }
+    assert!(!filler.is_finished(), "the scratch directory takes files");
     let result = write_with(&path, |file| -> Result<(), WriteError> {
         use std::io::Write;
         file.write_all(b"partial").unwrap();
