@@ -12,11 +12,11 @@
 //!   finite (all neighbours identical), so output is always finite;
 //! - the normal is oriented so the query point lies on its upper side, and, when the
 //!   query point lies exactly in the plane, so its first non-zero component is positive;
-//! - a neighbour lying on the U / L split plane (within 1e-9 of the neighbourhood's size)
-//!   joins U or L by a fixed pattern of its rank that halves any run of ranks about
-//!   evenly: rounding splits a rotated plane's points so, while on a plane along the
-//!   axes every offset is exactly 0 and `>= 0` would put them all in U, giving a wall
-//!   or a CAD face features that no rotated copy of it has;
+//! - a neighbour exactly on the U / L split plane joins U or L by a fixed pattern of its
+//!   rank that halves any run of ranks about evenly: rounding splits a rotated plane's
+//!   points so, while on a plane along the axes every offset is exactly 0 and `>= 0`
+//!   would put them all in U, giving a wall or a CAD face features that no rotated copy
+//!   of it has;
 //! - points that repeat a position count once: the neighbourhoods are those of the
 //!   distinct positions, whose features the repeats share, so a cloud stored with repeats
 //!   (real scans have them) gets the features of the same cloud stored once;

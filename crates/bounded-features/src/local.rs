@@ -327,12 +327,7 @@ fn frames<'a>(
     }
 }
 
-/// Offsets `<q - m, n>` within this fraction of the neighbourhood's size (`1 / scale`)
-/// count as on the split plane: far below a float32 coordinate's rounding, and above the
-/// float64 rounding of the offsets themselves.
-const ON_PLANE: f64 = 1e-9;
-
-/// Which side a neighbour on the split plane takes (see [`upper_sets`]): the top bit of
+/// Which side a neighbour exactly on the split plane takes (see [`upper_sets`]): the top bit of
 /// its rank times 2^64 / golden ratio, a fixed pattern that splits any run of ranks
 /// about evenly and irregularly, as rounding splits a rotated plane.
 #[inline(always)]
@@ -345,12 +340,15 @@ fn on_plane_goes_up(rank: usize) -> bool {
 /// sign of `<q^, n>`, as the scale factor is positive), L the rest, so its moments are
 /// the whole set's minus U's.
 ///
-/// Not in the paper: a neighbour on the split plane (within [`ON_PLANE`]) joins U or L
-/// by its rank ([`on_plane_goes_up`]). On a rotated plane the offsets' rounding splits
-/// its points about in halves, and the classifier learns from such clouds; on a plane
-/// along the axes (a CAD part, a wall) every offset is exactly 0, and `>= 0` alone would
-/// put all of them in U and leave L empty, features no rotated copy has (an
-/// axis-aligned open box's rim: 39% found as boundary against 98% rotated).
+/// Not in the paper: a neighbour exactly on the split plane (`<q, n> = <m, n>`) joins U
+/// or L by its rank ([`on_plane_goes_up`]). On a rotated plane the offsets' rounding
+/// splits its points about in halves, and the classifier learns from such clouds; on a
+/// plane along the axes (a CAD part, a wall) every offset is exactly 0, and `>= 0` alone
+/// would put all of them in U and leave L empty, features no rotated copy has (an
+/// axis-aligned open box's rim: 39% found as boundary against 98% rotated). Only exact
+/// ties change sides: any tolerance also moved some of the rounding-split neighbours of
+/// the generated training clouds (1e-14 of the neighbourhood's size did), and so the
+/// features the embedded model was trained on.
 fn upper_sets(arch: pulp::Arch, scratch: &mut Scratch, count: usize, config: &FeatureConfig) {
     let lanes = &mut scratch.lanes[..count];
     for lane in lanes.iter_mut() {
@@ -358,20 +356,19 @@ fn upper_sets(arch: pulp::Arch, scratch: &mut Scratch, count: usize, config: &Fe
     }
     for (i, (&k, prefix)) in config.scales.iter().zip(&scratch.prefix).enumerate() {
         let mut normal = [[0.0; LANES]; 3];
-        let mut plane = [[0.0; LANES]; 2];
+        let mut threshold = [0.0; LANES];
         for (l, lane) in lanes.iter().enumerate() {
             let f = &lane.frames[i];
             for (n, c) in normal.iter_mut().zip(f.normal) {
                 n[l] = c;
             }
             // <q - m, n> >= 0  <=>  <q, n> >= <m, n>
-            let (at, within) = (dot(f.mean, f.normal), ON_PLANE / f.scale);
-            [plane[0][l], plane[1][l]] = [at - within, at + within];
+            threshold[l] = dot(f.mean, f.normal);
         }
         let upper = arch.dispatch(UpperSums {
             xyz: &scratch.xyz[..k],
             normal,
-            plane,
+            threshold,
         });
         for ((lane, upper), m) in lanes.iter_mut().zip(upper).zip(prefix) {
             lane.sides
@@ -475,11 +472,11 @@ impl pulp::WithSimd for NearSums<'_> {
 }
 
 /// The moments of the upper sets U (see [`upper_sets`]) of the lanes' points `xyz`, in
-/// rank order, whose split plane lies between `plane[0]` and `plane[1]` along `normal`.
+/// rank order, whose split plane lies at `threshold` along `normal`.
 struct UpperSums<'a> {
     xyz: &'a [[Lanes; 3]],
     normal: [Lanes; 3],
-    plane: [Lanes; 2],
+    threshold: Lanes,
 }
 
 impl pulp::WithSimd for UpperSums<'_> {
@@ -487,9 +484,13 @@ impl pulp::WithSimd for UpperSums<'_> {
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, simd: S) -> [Moments; LANES] {
-        let Self { xyz, normal, plane } = self;
+        let Self {
+            xyz,
+            normal,
+            threshold,
+        } = self;
         let [nx, ny, nz] = [&normal[0], &normal[1], &normal[2]].map(registers::<S>);
-        let [below, above] = [&plane[0], &plane[1]].map(registers::<S>);
+        let t = registers::<S>(&threshold);
         let mut acc = [[0.0; LANES]; 10];
         for (rank, xyz) in xyz.iter().enumerate() {
             let [x, y, z] = [&xyz[0], &xyz[1], &xyz[2]].map(registers::<S>);
@@ -501,9 +502,9 @@ impl pulp::WithSimd for UpperSums<'_> {
                     simd.mul_f64s(z[r], nz[r]),
                 );
                 let up = if goes_up {
-                    simd.greater_than_or_equal_f64s(along, below[r])
+                    simd.greater_than_or_equal_f64s(along, t[r])
                 } else {
-                    simd.greater_than_f64s(along, above[r])
+                    simd.greater_than_f64s(along, t[r])
                 };
                 add_lanes(simd, &mut acc, r, [x[r], y[r], z[r]], Some(up));
             }
@@ -715,16 +716,16 @@ mod tests {
     #[test]
     fn upper_sums_side_by_side_match_one_point_at_a_time() {
         // Lane 0's points lie exactly on its split plane (so join U by rank), lane 1's
-        // within its tolerance of it, and lanes 6 and 7 have frames that keep no point or
-        // every point.
+        // within 1e-12 of it (so by side), and lanes 6 and 7 have frames that keep no
+        // point or every point.
         let k = 45;
         let mut xyz = lanes(k);
-        for q in xyz.iter_mut() {
+        for (j, q) in xyz.iter_mut().enumerate() {
             q[2][0] = 0.25;
+            q[2][1] = ((j % 5) as f64 - 2.0) * 1e-12;
         }
         let mut normal = [[0.0; LANES]; 3];
         let mut threshold = [0.0; LANES];
-        let mut within = [1e-9; LANES];
         for l in 0..LANES {
             let n = [0.3 + l as f64, -0.2, 1.0 - 0.1 * l as f64];
             let len = dot(n, n).sqrt();
@@ -734,26 +735,13 @@ mod tests {
             threshold[l] = 0.05 * l as f64 - 0.1;
         }
         (normal[0][0], normal[1][0], normal[2][0], threshold[0]) = (0.0, 0.0, 1.0, 0.25);
-        for (j, q) in xyz.iter_mut().enumerate() {
-            q[2][1] = (j % 5) as f64 * 1e-12;
-        }
-        (
-            normal[0][1],
-            normal[1][1],
-            normal[2][1],
-            threshold[1],
-            within[1],
-        ) = (0.0, 0.0, 1.0, 0.0, 1e-11);
+        (normal[0][1], normal[1][1], normal[2][1], threshold[1]) = (0.0, 0.0, 1.0, 0.0);
         threshold[6] = 10.0;
         threshold[7] = -10.0;
-        let plane = [
-            std::array::from_fn(|l| threshold[l] - within[l]),
-            std::array::from_fn(|l| threshold[l] + within[l]),
-        ];
         let got = pulp::Arch::new().dispatch(UpperSums {
             xyz: &xyz,
             normal,
-            plane,
+            threshold,
         });
         for (l, got) in got.iter().enumerate() {
             let n = normal.map(|c| c[l]);
@@ -761,11 +749,8 @@ mod tests {
             let want = Moments::of(
                 points
                     .filter(|&(j, q)| {
-                        if on_plane_goes_up(j) {
-                            dot(q, n) >= plane[0][l]
-                        } else {
-                            dot(q, n) > plane[1][l]
-                        }
+                        let along = dot(q, n);
+                        along > threshold[l] || (along == threshold[l] && on_plane_goes_up(j))
                     })
                     .map(|(_, q)| q),
             );
@@ -773,7 +758,9 @@ mod tests {
         }
         let by_rank = (0..k).filter(|&j| on_plane_goes_up(j)).count();
         assert!(by_rank > k / 3 && by_rank < 2 * k / 3, "{by_rank} of {k}");
-        assert_eq!((got[0].n, got[1].n), (by_rank, by_rank));
+        // Lane 1: offsets -2, -1, 0, 1, 2 (x 1e-12) by rank mod 5.
+        let side = (0..k).filter(|&j| j % 5 > 2 || (j % 5 == 2 && on_plane_goes_up(j)));
+        assert_eq!((got[0].n, got[1].n), (by_rank, side.count()));
         assert_eq!((got[6].n, got[7].n), (0, k));
     }
 
