@@ -22,8 +22,8 @@ pub struct Model {
 
 #[pymethods]
 impl Model {
-    /// The model built into the package: two stages, scales 128, 64, 32, 16, trained on
-    /// generated clouds only.
+    /// The model built into the package: two stages, 16 scales from 128 down to 10
+    /// neighbours, trained on generated clouds only.
     #[staticmethod]
     pub fn embedded() -> PyResult<Self> {
         Ok(Self {

@@ -233,10 +233,11 @@ def test_threads_do_not_change_the_result(box):
 
 def test_models_embedded_loaded_or_by_path(box):
     embedded = bounded.Model.embedded()
-    assert embedded.scales == [128, 64, 32, 16]
+    scales = [128, 108, 91, 76, 64, 54, 45, 38, 32, 27, 23, 19, 16, 13, 11, 10]
+    assert embedded.scales == scales
     assert embedded.stages == 2
     assert embedded.feature_names == bounded.feature_names()
-    assert repr(embedded) == "Model(embedded, scales=[128, 64, 32, 16], stages=2)"
+    assert repr(embedded) == f"Model(embedded, scales={scales}, stages=2)"
     reference = bounded.detect(box)
     loaded = bounded.Model.load(DEFAULT_MODEL)
     assert loaded.scales == embedded.scales and loaded.stages == 2
