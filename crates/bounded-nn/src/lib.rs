@@ -67,8 +67,8 @@ pub use model::{CLASS_NAMES, LayerWeights, Model, ModelConfig, N_CLASSES};
 pub use standardisation::Standardisation;
 pub use training::{Progress, TrainConfig, TrainedModel, train};
 
-/// The embedded default model (4 scales of 128, 64, 32, 16 neighbours x 12 features, and an
-/// auto-context second stage over those features beside 4 context values per scale), trained
+/// The embedded default model (16 scales from 128 down to 10 neighbours x 12 features, and an
+/// auto-context second stage over those features beside 7 context values per scale), trained
 /// on generated sets only by the `bounded train` command recorded in the file and in README.md.
 const DEFAULT_MODEL: &[u8] = include_bytes!("../models/default.bmodel");
 
@@ -82,17 +82,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn default_model_loads_with_the_paper_shape() {
+    fn default_model_loads_with_the_paper_network_at_16_scales() {
         let classifier = default_model().unwrap();
         let file = classifier.file();
-        assert_eq!(file.scales, vec![128, 64, 32, 16]);
+        let scales = [
+            128, 108, 91, 76, 64, 54, 45, 38, 32, 27, 23, 19, 16, 13, 11, 10,
+        ];
+        assert_eq!(file.scales, scales);
         assert_eq!(file.feature_names.len(), 12);
-        assert_eq!(file.model.n_params(), 1595);
+        // SPEC.md's fusion tree over 16 scales (15 fusion layers) and its classifier.
+        assert_eq!(file.model.n_params(), 6179);
         assert_eq!(file.class_names, CLASS_NAMES);
         let second = classifier
             .second_stage()
             .expect("an auto-context second stage");
         assert_eq!(second.file().feature_names.len(), 12 + 7);
-        assert_eq!(second.file().model.n_params(), 1931);
+        assert_eq!(second.file().model.n_params(), 7523);
     }
 }
