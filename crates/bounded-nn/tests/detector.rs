@@ -150,11 +150,15 @@ fn too_few_points_and_bad_scales_are_clear_errors() {
         .unwrap()
         .with_scales(&[64, 32])
         .unwrap_err();
-    assert!(e.to_string().contains("trained on 4"), "{e}");
+    assert!(e.to_string().contains("trained on 16"), "{e}");
+    // As many scales as the model's, but smallest first.
+    let ascending = [
+        10, 11, 13, 16, 19, 23, 27, 32, 38, 45, 54, 64, 76, 91, 108, 128,
+    ];
     assert!(
         Detector::embedded()
             .unwrap()
-            .with_scales(&[16, 32, 64, 128])
+            .with_scales(&ascending)
             .is_err()
     );
 }
