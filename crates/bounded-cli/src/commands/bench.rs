@@ -66,10 +66,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         runs: 1,
         ..schedule
     };
+    // Full mode: the 16-scale main model alone trains for about 90 minutes (2026-12-05).
     eprintln!(
-        "bench: {} mode, expected duration about {} minutes on 2 cores (full mode peaks near 12 GB of memory)",
+        "bench: {} mode, expected duration {} on 2 cores (full mode peaks near 12 GB of memory)",
         if args.quick { "quick" } else { "full" },
-        if args.quick { 6 } else { 65 }
+        if args.quick { "a few minutes" } else { "over 2 hours" }
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
