@@ -70,7 +70,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     eprintln!(
         "bench: {} mode, expected duration {} on 2 cores (full mode peaks near 12 GB of memory)",
         if args.quick { "quick" } else { "full" },
-        if args.quick { "a few minutes" } else { "over 2 hours" }
+        if args.quick {
+            "a few minutes"
+        } else {
+            "over 2 hours"
+        }
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
