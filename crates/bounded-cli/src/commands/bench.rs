@@ -13,7 +13,7 @@ use bounded_data::LabelledCloud;
 use bounded_data::peers;
 use bounded_data::picture::{Canvas, PALETTE, Series, View, precision_recall, render_classes};
 use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind, recipe};
-use bounded_features::{ContextSet, FeatureConfig, FeatureGroups};
+use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 use bounded_nn::baseline::CaBaseline;
 use bounded_nn::calibration::{Calibration, describe, sensitivity_table, with_chosen_sensitivity};
@@ -67,14 +67,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         ..schedule
     };
     // Full mode: the 16-scale main model alone trains for about 90 minutes (2026-12-05).
+    let (mode, duration) = if args.quick {
+        ("quick", "a few minutes")
+    } else {
+        ("full", "over 2 hours")
+    };
     eprintln!(
-        "bench: {} mode, expected duration {} on 2 cores (full mode peaks near 12 GB of memory)",
-        if args.quick { "quick" } else { "full" },
-        if args.quick {
-            "a few minutes"
-        } else {
-            "over 2 hours"
-        }
+        "bench: {mode} mode, expected duration {duration} on 2 cores (full mode peaks near 12 GB of memory)"
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
@@ -86,12 +85,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let training = recipe::generate(&recipe::TRAINING_SETS, if args.quick { 4 } else { 1 })?;
 
     let full = FeatureConfig::ablation(16, FeatureGroups::ALL)?;
-    // The embedded recipe: the scale ablation's 16 scales, and a second stage that reads the
-    // line context (docs/model.md, 2026-12-05).
-    let main = FeatureConfig {
-        context: ContextSet::WithLine,
-        ..FeatureConfig::ablation(16, FeatureGroups::BOUNDED)?
-    };
+    // The embedded model's feature extraction (its scales, groups and context), retrained.
+    let main = Detector::embedded()?.feature_config().clone();
     let mut report = String::from("# BoundED-rs bench\n\n");
     let _ = writeln!(
         report,
@@ -99,7 +94,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
          (the second auto-context; ablations: single-stage, 1 run). \
          Training data: {} with noise levels {:?} spacings along {} ({} clouds, {} points). \
          Evaluation data is never trained on.\n",
-        if args.quick { "quick" } else { "full" },
+        mode,
         schedule.iterations,
         schedule.runs,
         recipe::TRAINING_SETS.join(", "),
@@ -201,14 +196,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
     // 4: ablations, single-stage, around SPEC.md's 4 scales; the main model's configuration
     // reuses its first stage, and the 4-scale one (three tables' reference) is trained once.
+    let train = |target: &FeatureConfig, widths: &Widths| {
+        trained(&train_full, &full, target, &ablation_schedule, widths)
+    };
     let four = FeatureConfig::default();
-    let reference = trained(
-        &train_full,
-        &full,
-        &four,
-        &ablation_schedule,
-        &Widths::default(),
-    )?;
+    let reference = train(&four, &Widths::default())?;
     let ablation = |label: &str, target: &FeatureConfig, widths: &Widths| -> Result<String> {
         let ablated;
         // Single-stage: the context does not matter.
@@ -220,7 +212,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         } else if is(&four) {
             &reference
         } else {
-            ablated = trained(&train_full, &full, target, &ablation_schedule, widths)?;
+            ablated = train(target, widths)?;
             &ablated
         };
         let scorer = Scorer::Columns { model, target };
