@@ -342,7 +342,7 @@ pub struct BenchArgs {
     /// Output directory for report.md and the plots.
     #[arg(short, long, default_value = "bench-report")]
     pub output: PathBuf,
-    /// Fewer iterations and runs: finishes in minutes.
+    /// Fewer iterations and runs: about 10 minutes on 2 cores.
     #[arg(long)]
     pub quick: bool,
 }
