@@ -1,6 +1,9 @@
 //! CPU training with Burn: Adam on seeded random batches, validation every few iterations,
 //! the best weights by validation loss over several runs.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::thread;
 use std::time::Instant;
 
 use burn::optim::{AdamConfig, GradientsParams};
@@ -99,14 +102,31 @@ pub struct TrainedModel {
 }
 
 /// Trains `config.runs` models on `data` and returns the one with the lowest validation loss.
-/// `progress` is called after every iteration (for a progress bar).
+/// `progress` is called after every iteration of every run (for a progress bar), on the
+/// calling thread.
 ///
 /// The validation points are drawn per class from `data` with `config.seed` and excluded from
 /// the batches; the standardisation is measured on all of `data`. Runs are reproducible for a
 /// given seed up to the floating point order of Burn's kernels.
+///
+/// The runs are independent (run `r` seeds its weights, batches and dropout with `seed + r`),
+/// so they run side by side on up to `rayon::current_num_threads()` threads: Flex spreads a
+/// batch of this small network over one core only, and a run's result does not depend on
+/// which thread ran it or when. The best weights are then chosen in run order, as one thread
+/// running the runs one after another would choose them (a test holds the two equal).
 pub fn train(
     data: &Dataset<'_>,
     config: &TrainConfig,
+    progress: impl FnMut(&Progress),
+) -> Result<TrainedModel, NnError> {
+    train_on(data, config, rayon::current_num_threads(), progress)
+}
+
+/// [`train`] with the runs spread over at most `threads` threads.
+fn train_on(
+    data: &Dataset<'_>,
+    config: &TrainConfig,
+    threads: usize,
     mut progress: impl FnMut(&Progress),
 ) -> Result<TrainedModel, NnError> {
     config.model.validate()?;
@@ -119,26 +139,136 @@ pub fn train(
             "no training points left after the validation split".into(),
         ));
     }
-    let plain = cpu_device();
-    let (mut val_x, mut val_y) = (Vec::new(), Vec::new());
-    data.gather(&val_indices, &mut val_x, &mut val_y);
-    let validation = (!val_indices.is_empty()).then(|| {
-        let n = val_indices.len();
-        (
-            Tensor::<2>::from_data(TensorData::new(val_x, [n, data.n_inputs()]), &plain),
-            Tensor::<1, Int>::from_data(TensorData::new(val_y, [n]), &plain),
-        )
+    let mut validation = (Vec::new(), Vec::new());
+    data.gather(&val_indices, &mut validation.0, &mut validation.1);
+    let shared = Shared {
+        data,
+        config,
+        standardisation: &standardisation,
+        pool: &pool,
+        validation: &validation,
+    };
+
+    // Workers take the next run until none is left and send their progress here.
+    let next = AtomicUsize::new(0);
+    let (sender, receiver) = mpsc::channel::<Progress>();
+    let mut outcomes: Vec<(usize, Result<RunOutcome, NnError>)> = thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads.clamp(1, config.runs))
+            .map(|_| {
+                let (sender, next, shared) = (sender.clone(), &next, &shared);
+                scope.spawn(move || {
+                    let mut done = Vec::new();
+                    loop {
+                        let run = next.fetch_add(1, Ordering::Relaxed);
+                        if run >= config.runs {
+                            break;
+                        }
+                        let outcome = shared.run(run, &sender);
+                        let failed = outcome.is_err();
+                        done.push((run, outcome));
+                        if failed {
+                            break;
+                        }
+                    }
+                    done
+                })
+            })
+            .collect();
+        drop(sender);
+        let mut best_val_loss: Option<f32> = None;
+        for mut step in receiver {
+            if let Some(v) = step.val_loss
+                && better(v, best_val_loss)
+            {
+                best_val_loss = Some(v);
+            }
+            step.best_val_loss = best_val_loss;
+            progress(&step);
+        }
+        workers
+            .into_iter()
+            .flat_map(|w| {
+                w.join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            })
+            .collect()
     });
+    outcomes.sort_by_key(|(run, _)| *run);
 
     let mut best: Option<(f32, Model, usize, usize)> = None;
     let mut run_val_losses = Vec::with_capacity(config.runs);
-    for run in 0..config.runs {
+    for (run, outcome) in outcomes {
+        let outcome = outcome?;
+        run_val_losses.push(outcome.lowest);
+        if let Some((val_loss, model, iteration)) = outcome.best
+            && better(val_loss, best.as_ref().map(|b| b.0))
+        {
+            best = Some((val_loss, model, run, iteration));
+        }
+    }
+    let (val_loss, model, best_run, best_iteration) =
+        best.ok_or_else(|| NnError::InvalidConfig("training ran no iteration".into()))?;
+    Ok(TrainedModel {
+        model,
+        config: config.clone(),
+        standardisation,
+        val_loss,
+        best_run,
+        best_iteration,
+        run_val_losses,
+        data_hash: data.fingerprint(),
+    })
+}
+
+/// Whether a validation loss replaces the best so far: the first one, a lower one, or any
+/// where the best so far is not a number (so that runs compared in order pick the first
+/// lowest loss, and a diverged run never hides a later good one).
+fn better(loss: f32, best: Option<f32>) -> bool {
+    best.is_none_or(|b| b.is_nan() || loss < b)
+}
+
+/// What every run reads.
+struct Shared<'a> {
+    data: &'a Dataset<'a>,
+    config: &'a TrainConfig,
+    standardisation: &'a Standardisation,
+    /// Indices of the training points (the validation points excluded).
+    pool: &'a [u32],
+    /// Features and labels of the validation points.
+    validation: &'a (Vec<f32>, Vec<i64>),
+}
+
+/// One run's result.
+struct RunOutcome {
+    /// Its best weights in evaluation mode, their validation loss and iteration (the last
+    /// weights of run 0 when there are no validation points, with a NaN loss).
+    best: Option<(f32, Model, usize)>,
+    /// Its lowest validation loss (infinite without validation points).
+    lowest: f32,
+}
+
+impl Shared<'_> {
+    /// Trains run `run` from its own seed, sending progress after every iteration.
+    fn run(&self, run: usize, progress: &mpsc::Sender<Progress>) -> Result<RunOutcome, NnError> {
+        let (data, config) = (self.data, self.config);
         let run_seed = config.seed.wrapping_add(run as u64);
-        let device = plain.clone().autodiff();
+        let plain = cpu_device();
+        let (val_x, val_y) = self.validation;
+        let validation = (!val_y.is_empty()).then(|| {
+            let n = val_y.len();
+            (
+                Tensor::<2>::from_data(
+                    TensorData::new(val_x.clone(), [n, data.n_inputs()]),
+                    &plain,
+                ),
+                Tensor::<1, Int>::from_data(TensorData::new(val_y.clone(), [n]), &plain),
+            )
+        });
+        let device = plain.autodiff();
         let weights = config
             .model
             .random_weights(&mut StdRng::seed_from_u64(run_seed));
-        let mut model = config.model.init(&standardisation, &weights, &device)?;
+        let mut model = config.model.init(self.standardisation, &weights, &device)?;
         // Half a million dropout decisions per batch: a small fast generator, seeded per run.
         let mut dropout_rng = SmallRng::seed_from_u64(run_seed);
         let mut optim = AdamConfig::new()
@@ -146,9 +276,13 @@ pub fn train(
             .with_beta_2(config.beta_2)
             .with_epsilon(config.epsilon)
             .init();
-        let mut sampler = BatchSampler::new(pool.clone(), data.labels(), config.sampling, run_seed);
+        let mut sampler =
+            BatchSampler::new(self.pool.to_vec(), data.labels(), config.sampling, run_seed);
         let (mut batch, mut xs, mut ys) = (Vec::new(), Vec::new(), Vec::new());
-        let mut run_best = f32::INFINITY;
+        let mut outcome = RunOutcome {
+            best: None,
+            lowest: f32::INFINITY,
+        };
         let start = Instant::now();
         for iteration in 1..=config.iterations {
             sampler.sample(config.batch_size, &mut batch);
@@ -174,44 +308,33 @@ pub fn train(
                     let eval = model.valid();
                     let val_loss =
                         scalar(config.loss.forward(eval.forward(vx.clone()), vy.clone()))?;
-                    run_best = run_best.min(val_loss);
-                    if best.as_ref().is_none_or(|b| val_loss < b.0) {
-                        best = Some((val_loss, eval, run, iteration));
+                    outcome.lowest = outcome.lowest.min(val_loss);
+                    if better(val_loss, outcome.best.as_ref().map(|b| b.0)) {
+                        outcome.best = Some((val_loss, eval, iteration));
                     }
                     Some(val_loss)
                 }
                 // Without validation points the last weights of the first run are kept.
                 (None, true) if run == 0 && iteration == config.iterations => {
-                    best = Some((f32::NAN, model.valid(), run, iteration));
+                    outcome.best = Some((f32::NAN, model.valid(), iteration));
                     None
                 }
                 _ => None,
             };
-            progress(&Progress {
+            // The receiver lives until every worker is done, so sending cannot fail.
+            let _ = progress.send(Progress {
                 run,
                 runs: config.runs,
                 iteration,
                 iterations: config.iterations,
                 loss,
                 val_loss,
-                best_val_loss: best.as_ref().map(|b| b.0),
+                best_val_loss: None,
                 iterations_per_second: iteration as f32 / start.elapsed().as_secs_f32(),
             });
         }
-        run_val_losses.push(run_best);
+        Ok(outcome)
     }
-    let (val_loss, model, best_run, best_iteration) =
-        best.ok_or_else(|| NnError::InvalidConfig("training ran no iteration".into()))?;
-    Ok(TrainedModel {
-        model,
-        config: config.clone(),
-        standardisation,
-        val_loss,
-        best_run,
-        best_iteration,
-        run_val_losses,
-        data_hash: data.fingerprint(),
-    })
 }
 
 fn check(config: &TrainConfig, data: &Dataset<'_>) -> Result<(), NnError> {
@@ -342,6 +465,44 @@ pub(crate) mod tests {
         assert_eq!(a.val_loss, b.val_loss);
         let c = train(&data, &config.with_seed(9), |_| {}).unwrap();
         assert_ne!(a.val_loss, c.val_loss);
+    }
+
+    #[test]
+    fn runs_side_by_side_give_the_sequential_result_bit_for_bit() {
+        let (features, labels) = toy_set(800, 4);
+        let data = Dataset::new(&features, &labels, 4).unwrap();
+        let config = toy_config()
+            .with_iterations(60)
+            .with_runs(3)
+            .with_val_every(10);
+        let run = |threads| {
+            let mut steps = vec![0; 3];
+            let trained = train_on(&data, &config, threads, |p| steps[p.run] += 1).unwrap();
+            assert_eq!(steps, [60, 60, 60]);
+            trained
+        };
+        let (one, two) = (run(1), run(2));
+        assert_eq!(one.run_val_losses, two.run_val_losses);
+        assert_eq!(
+            (one.val_loss, one.best_run, one.best_iteration),
+            (two.val_loss, two.best_run, two.best_iteration)
+        );
+        assert_eq!(
+            one.model.export_weights().unwrap(),
+            two.model.export_weights().unwrap()
+        );
+        // The runs differ, so the choice among them is tested too.
+        assert_ne!(one.run_val_losses[0], one.run_val_losses[1]);
+    }
+
+    #[test]
+    fn a_lower_loss_or_one_after_nan_is_better() {
+        assert!(better(0.5, None));
+        assert!(better(0.4, Some(0.5)));
+        assert!(!better(0.5, Some(0.5)));
+        assert!(!better(0.6, Some(0.5)));
+        assert!(better(0.6, Some(f32::NAN)));
+        assert!(!better(f32::NAN, Some(0.5)));
     }
 
     #[test]
