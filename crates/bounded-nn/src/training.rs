@@ -149,50 +149,48 @@ fn train_on(
         validation: &validation,
     };
 
-    // Workers take the next run until none is left and send their progress here.
-    let next = AtomicUsize::new(0);
-    let (sender, receiver) = mpsc::channel::<Progress>();
-    let mut outcomes: Vec<(usize, Result<RunOutcome, NnError>)> = thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads.clamp(1, config.runs))
-            .map(|_| {
-                let (sender, next, shared) = (sender.clone(), &next, &shared);
-                scope.spawn(move || {
-                    let mut done = Vec::new();
-                    loop {
-                        let run = next.fetch_add(1, Ordering::Relaxed);
-                        if run >= config.runs {
-                            break;
-                        }
-                        let outcome = shared.run(run, &sender);
-                        let failed = outcome.is_err();
-                        done.push((run, outcome));
-                        if failed {
-                            break;
-                        }
-                    }
-                    done
-                })
-            })
-            .collect();
-        drop(sender);
-        let mut best_val_loss: Option<f32> = None;
-        for mut step in receiver {
-            if let Some(v) = step.val_loss
-                && better(v, best_val_loss)
-            {
-                best_val_loss = Some(v);
-            }
-            step.best_val_loss = best_val_loss;
-            progress(&step);
+    // Every step gets the best validation loss over all runs so far.
+    let mut best_val_loss: Option<f32> = None;
+    let mut report = |mut step: Progress| {
+        if let Some(v) = step.val_loss
+            && better(v, best_val_loss)
+        {
+            best_val_loss = Some(v);
         }
-        workers
-            .into_iter()
-            .flat_map(|w| {
-                w.join()
-                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-            })
-            .collect()
-    });
+        step.best_val_loss = best_val_loss;
+        progress(&step);
+    };
+    let next = AtomicUsize::new(0);
+    let threads = threads.clamp(1, config.runs);
+    let mut outcomes = if threads == 1 {
+        // On the calling thread: no thread blocks waiting, even inside a one-thread rayon pool.
+        shared.take_runs(&next, &mut report)
+    } else {
+        // Workers take the next run until none is left and send their progress here.
+        let (sender, receiver) = mpsc::channel::<Progress>();
+        thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|_| {
+                    let (sender, next, shared) = (sender.clone(), &next, &shared);
+                    scope.spawn(move || {
+                        // The receiver lives until every worker is done: sending cannot fail.
+                        shared.take_runs(next, &mut |step| {
+                            let _ = sender.send(step);
+                        })
+                    })
+                })
+                .collect();
+            drop(sender);
+            receiver.into_iter().for_each(&mut report);
+            workers
+                .into_iter()
+                .flat_map(|w| {
+                    w.join()
+                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+                })
+                .collect::<Vec<_>>()
+        })
+    };
     outcomes.sort_by_key(|(run, _)| *run);
 
     let mut best: Option<(f32, Model, usize, usize)> = None;
@@ -248,8 +246,29 @@ struct RunOutcome {
 }
 
 impl Shared<'_> {
-    /// Trains run `run` from its own seed, sending progress after every iteration.
-    fn run(&self, run: usize, progress: &mpsc::Sender<Progress>) -> Result<RunOutcome, NnError> {
+    /// Trains the next run not yet taken (counted by `next`) until none is left or one fails.
+    fn take_runs(
+        &self,
+        next: &AtomicUsize,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Vec<(usize, Result<RunOutcome, NnError>)> {
+        let mut done = Vec::new();
+        loop {
+            let run = next.fetch_add(1, Ordering::Relaxed);
+            if run >= self.config.runs {
+                return done;
+            }
+            let outcome = self.run(run, progress);
+            let failed = outcome.is_err();
+            done.push((run, outcome));
+            if failed {
+                return done;
+            }
+        }
+    }
+
+    /// Trains run `run` from its own seed, passing progress on after every iteration.
+    fn run(&self, run: usize, progress: &mut dyn FnMut(Progress)) -> Result<RunOutcome, NnError> {
         let (data, config) = (self.data, self.config);
         let run_seed = config.seed.wrapping_add(run as u64);
         let plain = cpu_device();
@@ -321,8 +340,7 @@ impl Shared<'_> {
                 }
                 _ => None,
             };
-            // The receiver lives until every worker is done, so sending cannot fail.
-            let _ = progress.send(Progress {
+            progress(Progress {
                 run,
                 runs: config.runs,
                 iteration,
