@@ -10,7 +10,9 @@
 //! along the surface normal only; labels stay those of the clean points) and a few outliers
 //! (non-edge). With [`SetConfig::face_spacing`] above 1 (spec option `faces=F`), mesh-vertex
 //! shapes fill their planar faces more sparsely than their crease rows, as SPEC.md describes
-//! the ABC clouds.
+//! the ABC clouds. With [`SetConfig::band`] (spec option `band=B`), every point within `B`
+//! spacings of a crease is sharp: the band convention of the free-form kind, for a model
+//! meant to call bands rather than one row.
 //!
 //! The free-form kind ([`SetKind::Freeform`], see [`generate_freeform`]) is built
 //! differently: smooth parametric bases (height fields, bent and twisted sheets, shells)
@@ -177,6 +179,8 @@ pub struct SetConfig {
     /// sum to about 30 in the CAD sets (0, the default, draws none and leaves every other
     /// draw of a set as it was; 30 makes about half the shapes shallow ridges).
     pub shallow: f64,
+    /// The mesh kinds' sharp band ([`ShapeSpec::band`]): `None`, the default, labels one row.
+    pub band: Option<f64>,
 }
 
 /// The largest [`SetConfig::shallow`]: a set of nothing but shallow ridges teaches nothing
@@ -204,6 +208,7 @@ impl SetConfig {
             label_rule: LabelRule::default(),
             face_spacing: 1.0,
             shallow: 0.0,
+            band: None,
         }
     }
 
@@ -222,6 +227,7 @@ impl SetConfig {
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
         check_outlier_fraction(self.outlier_fraction)?;
         check_face_spacing(self.face_spacing)?;
+        self.band.map_or(Ok(()), check_band)?;
         check_within(self.shallow, 0.0..=MAX_SHALLOW, || {
             format!(
                 "shallow ridges' weight {}: 0 to {MAX_SHALLOW} (the other shapes' sum to about 30)",
@@ -326,6 +332,7 @@ impl SetConfig {
             outlier_fraction,
             seed,
             face_spacing,
+            band: self.band,
         }
     }
 
@@ -369,6 +376,12 @@ pub struct ShapeSpec {
     /// In mesh-vertex mode, the minimum distance of the fill on planar faces, in multiples
     /// of the crease rows' and curved faces' (1: the same everywhere).
     pub face_spacing: f64,
+    /// Half-width of the sharp band, in units of the cloud's median nearest-neighbour
+    /// spacing (measured on the clean points, as the noise is): every point that close to a
+    /// crease is sharp, as the free-form kind's [`LabelRule::band`] labels its kinks, so that
+    /// a model can be trained for bands on every kind. `None` keeps one row (see
+    /// [`Sampling`]), which is about `band` 0.66 in random mode.
+    pub band: Option<f64>,
 }
 
 /// Generates a whole set in parallel, in index order.
@@ -408,6 +421,7 @@ pub fn generate_one(
 pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     check_noise(spec.noise)?;
     check_face_spacing(spec.face_spacing)?;
+    spec.band.map_or(Ok(()), check_band)?;
     check_outlier_fraction(spec.outlier_fraction)?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut mesh = spec.kind.build(&mut rng);
@@ -424,6 +438,9 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
         &mut rng,
     );
     let spacing = perturb::median_spacing(&sampled.points, sampled.spacing_hint);
+    if let Some(band) = spec.band {
+        sample::widen_sharp(&mut sampled, &features.sharp, band * spacing);
+    }
     let sigma = spec.noise * spacing;
     match spec.noise_direction {
         NoiseDirection::Isotropic => perturb::add_noise(&mut sampled.points, sigma, &mut rng),
@@ -479,6 +496,16 @@ fn check_face_spacing(spacing: f64) -> Result<(), DataError> {
             "face spacing {spacing}: a multiple of the crease rows' spacing, 1 to \
              {MAX_FACE_SPACING}"
         )
+    })
+}
+
+/// A mesh kind's sharp band must be a positive number of spacings.
+fn check_band(band: f64) -> Result<(), DataError> {
+    if band.is_finite() && band > 0.0 {
+        return Ok(());
+    }
+    Err(DataError::Generator {
+        what: format!("sharp band {band}: a multiple of the point spacing, above 0"),
     })
 }
 
@@ -563,8 +590,9 @@ impl SetConfig {
     /// This set with `options`, each `NAME=NUMBER`, checked: for the free-form kind the
     /// label rules `depth=`, `angle=`, `band=` and `noise=` (its [`LabelRule`]'s
     /// `min_depth`, `min_angle`, `band` and `min_depth_per_noise`); for the mesh kinds
-    /// `faces=` ([`face_spacing`](Self::face_spacing)) and `shallow=`
-    /// ([`shallow`](Self::shallow)). An option of the other kinds is refused.
+    /// `faces=` ([`face_spacing`](Self::face_spacing)), `shallow=`
+    /// ([`shallow`](Self::shallow)) and `band=` ([`band`](Self::band)). An option of the
+    /// other kinds is refused.
     pub fn with_options(mut self, options: &[&str]) -> Result<SetConfig, DataError> {
         let bad = |what: String| DataError::Generator { what };
         let freeform = self.kind == SetKind::Freeform;
@@ -580,6 +608,7 @@ impl SetConfig {
             let (field, for_freeform) = match name {
                 "depth" => (&mut label.min_depth, true),
                 "angle" => (&mut label.min_angle, true),
+                "band" if !freeform => (self.band.insert(value), false),
                 "band" => (&mut label.band, true),
                 "noise" => (&mut label.min_depth_per_noise, true),
                 "faces" => (&mut self.face_spacing, false),
@@ -689,6 +718,7 @@ mod tests {
             outlier_fraction: 0.01,
             seed: 0,
             face_spacing: 1.0,
+            band: None,
         };
         for spec in every_shape(template) {
             let (kind, sampling) = (spec.kind, spec.sampling);
@@ -726,6 +756,7 @@ mod tests {
             outlier_fraction: 0.0,
             seed: 0,
             face_spacing: 1.0,
+            band: None,
         };
         for spec in every_shape(template) {
             let noisy = generate_shape(&spec).unwrap();
@@ -757,6 +788,7 @@ mod tests {
                 outlier_fraction: 0.0,
                 seed: 11,
                 face_spacing: 1.0,
+                band: None,
             };
             let clean = generate_shape(&ShapeSpec {
                 noise: 0.0,
@@ -797,6 +829,7 @@ mod tests {
             outlier_fraction: 0.0,
             seed: 1,
             face_spacing: 1.0,
+            band: None,
         };
         assert!(generate_shape(&spec).is_ok());
         for noise in [-0.1, f64::NAN, f64::INFINITY] {
@@ -828,6 +861,35 @@ mod tests {
         assert!(set.validate().is_ok());
         set.noise_levels = vec![0.2, -1.0];
         assert!(matches!(generate(&set), Err(DataError::Generator { .. })));
+    }
+
+    #[test]
+    fn a_sharp_band_widens_the_labels_and_moves_no_point() {
+        let one_row = small(SetKind::Cad, 5, 3);
+        let band = one_row.clone().with_options(&["band=1.5"]).unwrap();
+        assert_eq!(band.band, Some(1.5));
+        let (a, b) = (generate(&one_row).unwrap(), generate(&band).unwrap());
+        let (mut rows, mut widened) = (0, 0);
+        for ((_, a), (_, b)) in a.iter().zip(&b) {
+            assert_eq!(a.cloud, b.cloud);
+            for (&was, &now) in a.labels.iter().zip(&b.labels) {
+                // Rows stay sharp; only sharp labels are added.
+                assert!(was == now || now == Class::Sharp, "{was:?} -> {now:?}");
+                rows += usize::from(was == Class::Sharp);
+                widened += usize::from(was != now);
+            }
+        }
+        // Three spacings across against one row; in clouds this small the rows hold about a
+        // third of the points and neighbouring creases' bands overlap, so fewer are added.
+        assert!(2 * widened > rows, "{rows} in rows, {widened} added");
+        // The free-form kind keeps its own band; a band must be positive.
+        let freeform = SetConfig::new(SetKind::Freeform, 1, 2).with_options(&["band=2"]);
+        let freeform = freeform.unwrap();
+        assert_eq!((freeform.band, freeform.label_rule.band), (None, 2.0));
+        for bad in ["band=0", "band=-1", "band=inf"] {
+            let set = SetConfig::new(SetKind::Random, 1, 2).with_options(&[bad]);
+            assert!(matches!(set, Err(DataError::Generator { .. })), "{bad}");
+        }
     }
 
     #[test]
@@ -889,6 +951,7 @@ mod tests {
             assert_eq!(
                 ShapeSpec {
                     face_spacing: 1.0,
+                    band: None,
                     ..b.clone()
                 },
                 a
