@@ -66,15 +66,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         runs: 1,
         ..schedule
     };
-    // At 16 scales (2026-12-05): quick mode took 9.4 minutes; in full mode the main model
-    // alone trains for about 90 minutes.
+    // At 16 scales (2026-12-05): quick mode took 9.4 minutes, full mode 94.8 (10.1 GiB peak),
+    // 55 of them training the main model two runs at a time.
     let (mode, duration) = if args.quick {
         ("quick", "about 10 minutes")
     } else {
-        ("full", "over 2 hours")
+        ("full", "about 1.5 hours")
     };
     eprintln!(
-        "bench: {mode} mode, expected duration {duration} on 2 cores (full mode peaks near 12 GB of memory)"
+        "bench: {mode} mode, expected duration {duration} on 2 cores (full mode peaks near 11 GB of memory)"
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
