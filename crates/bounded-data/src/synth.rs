@@ -67,6 +67,7 @@ use bounded_geom::vec3::{self, V3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use relief::check_band;
 use std::ops::RangeInclusive;
 
 /// The most shapes a set may have: its clouds are held in memory together.
@@ -496,16 +497,6 @@ fn check_face_spacing(spacing: f64) -> Result<(), DataError> {
             "face spacing {spacing}: a multiple of the crease rows' spacing, 1 to \
              {MAX_FACE_SPACING}"
         )
-    })
-}
-
-/// A mesh kind's sharp band must be a positive number of spacings.
-fn check_band(band: f64) -> Result<(), DataError> {
-    if band.is_finite() && band > 0.0 {
-        return Ok(());
-    }
-    Err(DataError::Generator {
-        what: format!("sharp band {band}: a multiple of the point spacing, above 0"),
     })
 }
 

@@ -101,14 +101,19 @@ impl LabelRule {
                 self.min_depth_per_noise
             ));
         }
-        if !(self.band.is_finite() && self.band > 0.0) {
-            return bad(format!(
-                "label band {}: a multiple of the point spacing, above 0",
-                self.band
-            ));
-        }
-        Ok(())
+        check_band(self.band)
     }
+}
+
+/// A sharp band (the free-form rule's, or a mesh kind's) must be a positive number of
+/// spacings.
+pub(crate) fn check_band(band: f64) -> Result<(), DataError> {
+    if band.is_finite() && band > 0.0 {
+        return Ok(());
+    }
+    Err(DataError::Generator {
+        what: format!("label band {band}: a multiple of the point spacing, above 0"),
+    })
 }
 
 /// A cross-section: displacement `h(s)` along the base normal (positive outward) against the
