@@ -109,6 +109,47 @@ fn detect_writes_positions_back_at_full_precision() {
 }
 
 /// The positions of a table as read: the exact ones if it keeps them, else the cloud's.
+#[test]
+fn the_band_model_is_chosen_by_name_and_calls_wider_creases() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("box.ply");
+    format::write(&input, &PointTable::new(box_cloud(6000, 3).cloud)).unwrap();
+    let output = dir.path().join("out.ply");
+    let sharp = |embedded: &[&str]| {
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"detect", &input, &"-o", &output];
+        args.extend(embedded.iter().map(|a| a as &dyn AsRef<std::ffi::OsStr>));
+        let run = bounded_paths(&args);
+        assert!(run.status.success(), "{embedded:?}: {}", stderr(&run));
+        classes(&output).iter().filter(|&&c| c == 1.0).count()
+    };
+    let row = sharp(&[]);
+    assert_eq!(sharp(&["--embedded", "row"]), row);
+    // Bands about three rows wide along the box's creases, against one row.
+    let band = sharp(&["--embedded", "band"]);
+    assert!(2 * band > 3 * row && row > 0, "band {band}, row {row}");
+    let run = bounded_paths(&[&"detect", &input, &"-o", &output, &"--embedded", &"bands"]);
+    assert!(
+        stderr(&run).contains("no embedded model is called `bands`"),
+        "{}",
+        stderr(&run)
+    );
+    let run = bounded_paths(&[
+        &"detect",
+        &input,
+        &"-o",
+        &output,
+        &"--embedded",
+        &"band",
+        &"--model",
+        &input,
+    ]);
+    assert!(
+        stderr(&run).contains("cannot be used with"),
+        "{}",
+        stderr(&run)
+    );
+}
+
 fn positions(table: &PointTable) -> Vec<[f64; 3]> {
     match &table.exact_positions {
         Some(exact) => (0..exact.len()).map(|i| exact.get(i)).collect(),

@@ -2,7 +2,7 @@
 
 use bounded_data::annotate::{ClassTarget, Colours, Flavour};
 use bounded_data::synth::NoiseDirection;
-use bounded_nn::Decision;
+use bounded_nn::{Decision, EmbeddedModel};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
@@ -216,6 +216,11 @@ pub struct ModelArgs {
     /// Model file (default: the embedded model).
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// Which embedded model: `row` (the default) calls one row of points along each crease,
+    /// as the PCEDNet and ABC clouds are labelled; `band` calls a band 3 spacings wide, as
+    /// feature curves are often labelled.
+    #[arg(long, conflicts_with = "model")]
+    pub embedded: Option<EmbeddedModel>,
     /// Neighbourhood sizes, largest first, overriding the model's (same count as the model's).
     #[arg(long, value_delimiter = ',')]
     pub scales: Option<Vec<usize>>,

@@ -10,6 +10,7 @@ use bounded_nn::{Detection, Detector};
 pub fn detector(options: &ModelArgs) -> Result<Detector> {
     let ModelArgs {
         model,
+        embedded,
         scales,
         fast,
         sensitivity,
@@ -18,7 +19,8 @@ pub fn detector(options: &ModelArgs) -> Result<Detector> {
         Some(p) => {
             Detector::load(p).with_context(|| format!("cannot load model {}", p.display()))?
         }
-        None => Detector::embedded().context("cannot load the embedded model")?,
+        None => Detector::embedded_model(embedded.unwrap_or_default())
+            .context("cannot load the embedded model")?,
     };
     if let Some(scales) = scales {
         detector = detector.with_scales(scales).context("--scales")?;

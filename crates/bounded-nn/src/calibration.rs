@@ -232,6 +232,35 @@ pub fn with_chosen_sensitivity(
     Ok((file, calibration))
 }
 
+/// The bench's calibration section, in Markdown: the expected calibration errors and the
+/// p_sharp reliability of `on_validation` (the measurement the decision of `detector` was
+/// chosen on, over the clouds `validation` names), that decision, and the median sharp MCC
+/// against the sensitivity on the validation clouds and on each of the named `sets`.
+pub fn section(
+    detector: &Detector,
+    validation: &str,
+    on_validation: Calibration,
+    sets: &[(&str, Vec<TrainingCloud<'_>>)],
+) -> Result<String, NnError> {
+    let mut out = format!(
+        "## Calibration and sensitivity\n\nValidation clouds ({validation}, training noise): \
+         expected calibration error of p_sharp {:.4}, of p_boundary {:.4}; the highest median \
+         sharp MCC at {}, which the model records as its default decision (every table above; \
+         `--sensitivity` overrides it).\n\np_sharp reliability on them:\n\n{}\n\
+         Median sharp MCC against `--sensitivity`:\n\n",
+        on_validation.sharp.expected_calibration_error(),
+        on_validation.boundary.expected_calibration_error(),
+        describe(detector.sensitivity()),
+        on_validation.sharp.table()
+    );
+    let mut rows = vec![("validation", on_validation)];
+    for (name, clouds) in sets {
+        rows.push((name, Calibration::measure(detector, clouds)?));
+    }
+    out.push_str(&sensitivity_table(&rows));
+    Ok(out)
+}
+
 /// Markdown table of the median sharp MCC of each named calibration at every one of
 /// [`DECISIONS`], one row each.
 pub fn sensitivity_table(rows: &[(&str, Calibration)]) -> String {

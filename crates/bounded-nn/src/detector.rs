@@ -16,7 +16,7 @@ use bounded_features::{
 };
 use bounded_geom::{Class, PointCloud};
 
-use crate::{Classifier, N_CLASSES, NnError, argmax, default_model};
+use crate::{Classifier, EmbeddedModel, N_CLASSES, NnError, argmax, default_model};
 
 /// A model ready to label point clouds: its networks, the feature extraction it was trained
 /// with (or scales that replace the model's) and the decision rule.
@@ -137,6 +137,11 @@ impl Detector {
     /// The detector of the embedded default model (two stages).
     pub fn embedded() -> Result<Self, NnError> {
         Self::new(default_model()?)
+    }
+
+    /// The detector of one of the embedded models (two stages each).
+    pub fn embedded_model(which: EmbeddedModel) -> Result<Self, NnError> {
+        Self::new(which.classifier()?)
     }
 
     /// The detector of the model file at `path`.

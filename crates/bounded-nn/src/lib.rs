@@ -5,7 +5,9 @@
 //!
 //! Detection is one call: [`Detector::detect`] computes the features of every point
 //! (`bounded-features`) and runs the model's networks over them, both stages of a two-stage
-//! model over one neighbour search.
+//! model over one neighbour search. Two models are embedded ([`EmbeddedModel`]): the default
+//! calls one row of points along each crease, the other a band, for ground truth labelled
+//! either way.
 //!
 //! ```
 //! use bounded_geom::PointCloud;
@@ -42,6 +44,7 @@ pub mod baseline;
 pub mod calibration;
 pub mod data;
 pub mod detector;
+mod embedded;
 mod error;
 pub mod file;
 pub mod fit;
@@ -57,6 +60,7 @@ pub use backend::cpu_device;
 pub use calibration::Reliability;
 pub use data::{Dataset, Sampling};
 pub use detector::{Decision, Detection, Detector, Work, class_at};
+pub use embedded::{EmbeddedModel, default_model};
 pub use error::NnError;
 pub use file::{FORMAT_VERSION, ModelFile, Provenance};
 pub use fit::{FeatureSet, Schedule, Seconds, Step, TrainingCloud, Widths, fit, fit_stages};
@@ -66,37 +70,3 @@ pub use metrics::{BinaryConfusion, ConfusionMatrix, Scores, median};
 pub use model::{CLASS_NAMES, LayerWeights, Model, ModelConfig, N_CLASSES};
 pub use standardisation::Standardisation;
 pub use training::{Progress, TrainConfig, TrainedModel, train};
-
-/// The embedded default model (16 scales from 128 down to 10 neighbours x 12 features, and an
-/// auto-context second stage over those features beside 7 context values per scale), trained
-/// on generated sets only by the `bounded train` command recorded in the file and in README.md.
-const DEFAULT_MODEL: &[u8] = include_bytes!("../models/default.bmodel");
-
-/// The classifier embedded in the library.
-pub fn default_model() -> Result<Classifier, NnError> {
-    Classifier::from_bytes(DEFAULT_MODEL)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn default_model_loads_with_the_paper_network_at_16_scales() {
-        let classifier = default_model().unwrap();
-        let file = classifier.file();
-        let scales = [
-            128, 108, 91, 76, 64, 54, 45, 38, 32, 27, 23, 19, 16, 13, 11, 10,
-        ];
-        assert_eq!(file.scales, scales);
-        assert_eq!(file.feature_names.len(), 12);
-        // SPEC.md's fusion tree over 16 scales (15 fusion layers) and its classifier.
-        assert_eq!(file.model.n_params(), 6179);
-        assert_eq!(file.class_names, CLASS_NAMES);
-        let second = classifier
-            .second_stage()
-            .expect("an auto-context second stage");
-        assert_eq!(second.file().feature_names.len(), 12 + 7);
-        assert_eq!(second.file().model.n_params(), 7523);
-    }
-}

@@ -85,7 +85,7 @@ fn detect(
     let model = match model {
         Some(ModelArg::Loaded(model)) => model,
         Some(ModelArg::Path(path)) => Bound::new(py, Model::load(py, path)?)?,
-        None => Bound::new(py, Model::embedded()?)?,
+        None => Bound::new(py, Model::embedded("row")?)?,
     };
     let detector = model.get().detector(scales.as_deref(), fast, sensitivity)?;
     let mut report = Progress::new(progress)?;

@@ -3,7 +3,7 @@
 
 use crate::errors;
 use bounded_geom::Class;
-use bounded_nn::{Classifier, Decision, Detector};
+use bounded_nn::{Classifier, Decision, Detector, EmbeddedModel};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -12,23 +12,30 @@ use std::path::PathBuf;
 /// with.
 ///
 /// ``Model.embedded()`` is the model built into the package (what ``detect`` uses when no model
-/// is given); ``Model.load(path)`` reads a ``.bmodel`` file written by ``bounded train``.
+/// is given), ``Model.embedded("band")`` the other one; ``Model.load(path)`` reads a
+/// ``.bmodel`` file written by ``bounded train``.
 #[pyclass(frozen, module = "bounded")]
 pub struct Model {
     detector: Detector,
-    /// Where it came from, for `repr`: the path, or `embedded`.
+    /// Where it came from, for `repr`: the path, or `embedded NAME`.
     source: String,
 }
 
 #[pymethods]
 impl Model {
-    /// The model built into the package: two stages, 16 scales from 128 down to 10
-    /// neighbours, trained on generated clouds only.
+    /// A model built into the package: ``"row"`` (the default) calls one row of points along
+    /// each crease, as the PCEDNet and ABC clouds are labelled; ``"band"`` calls a band 3
+    /// spacings wide, as feature curves are often labelled. Both have two stages at 16 scales
+    /// from 128 down to 10 neighbours, trained on generated clouds only.
+    ///
+    /// Raises ``ValueError`` for another name.
     #[staticmethod]
-    pub fn embedded() -> PyResult<Self> {
+    #[pyo3(signature = (name = "row"))]
+    pub fn embedded(name: &str) -> PyResult<Self> {
+        let which: EmbeddedModel = name.parse().map_err(errors::value)?;
         Ok(Self {
-            detector: Detector::embedded().map_err(errors::value)?,
-            source: "embedded".into(),
+            detector: Detector::embedded_model(which).map_err(errors::value)?,
+            source: format!("embedded {which}"),
         })
     }
 

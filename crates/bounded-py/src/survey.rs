@@ -81,7 +81,7 @@ pub fn detect_tile<'py>(
     let plan = Plan::new(inputs).map_err(survey_error)?;
     let model = match model {
         Some(path) => Model::load(py, path)?,
-        None => Model::embedded()?,
+        None => Model::embedded("row")?,
     };
     let detector = model.detector(scales.as_deref(), fast, sensitivity)?;
     let options = Options {

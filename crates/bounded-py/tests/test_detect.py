@@ -239,7 +239,7 @@ def test_models_embedded_loaded_or_by_path(box):
     assert embedded.scales == scales
     assert embedded.stages == 2
     assert embedded.feature_names == bounded.feature_names()
-    assert repr(embedded) == f"Model(embedded, scales={scales}, stages=2)"
+    assert repr(embedded) == f"Model(embedded row, scales={scales}, stages=2)"
     reference = bounded.detect(box)
     loaded = bounded.Model.load(DEFAULT_MODEL)
     assert loaded.scales == embedded.scales and loaded.stages == 2
@@ -247,6 +247,21 @@ def test_models_embedded_loaded_or_by_path(box):
     for model in (embedded, loaded, str(DEFAULT_MODEL), pathlib.Path(DEFAULT_MODEL)):
         result = bounded.detect(box, model=model)
         np.testing.assert_array_equal(result.probabilities, reference.probabilities)
+
+
+def test_the_band_model_calls_wider_edges_than_the_row_model(box):
+    band = bounded.Model.embedded("band")
+    assert band.scales == bounded.Model.embedded().scales and band.stages == 2
+    assert repr(band).startswith("Model(embedded band, ")
+    from_file = bounded.detect(box, model=DEFAULT_MODEL.with_name("band.bmodel"))
+    wide = bounded.detect(box, model=band)
+    np.testing.assert_array_equal(wide.probabilities, from_file.probabilities)
+    # Bands about three rows wide along the box's creases, against one row.
+    row_sharp = np.count_nonzero(bounded.detect(box).classes == bounded.SHARP)
+    band_sharp = np.count_nonzero(wide.classes == bounded.SHARP)
+    assert band_sharp > 1.5 * row_sharp > 0
+    with pytest.raises(ValueError, match="no embedded model is called `bands`"):
+        bounded.Model.embedded("bands")
 
 
 def test_model_files_that_cannot_be_used(tmp_path):

@@ -16,6 +16,12 @@ pub enum SurveyError {
         /// What failed.
         source: bounded_nn::NnError,
     },
+    /// Outputs that cannot be written as asked (checked before any work).
+    #[error("{0}")]
+    Outputs(String),
+    /// No file can be created where an output goes.
+    #[error(transparent)]
+    Write(#[from] bounded_geom::atomic::WriteError),
     /// A survey of no input, or with one file twice.
     #[error("invalid survey: {0}")]
     Invalid(String),

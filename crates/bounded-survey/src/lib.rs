@@ -60,9 +60,11 @@ mod blocks;
 mod detect;
 mod error;
 pub mod halo;
+mod outputs;
 mod plan;
 pub mod proof;
 
 pub use detect::{BLOCK_POINTS, Event, Options, TileReport, detect_survey, detect_tile};
 pub use error::SurveyError;
+pub use outputs::{output_paths, stdout_format};
 pub use plan::{Input, Plan, ReadOptions};

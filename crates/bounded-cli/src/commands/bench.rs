@@ -16,13 +16,13 @@ use bounded_data::synth::{self, NoiseDirection, SetConfig, SetKind, recipe};
 use bounded_features::{FeatureConfig, FeatureGroups};
 use bounded_geom::Class;
 use bounded_nn::baseline::CaBaseline;
-use bounded_nn::calibration::{Calibration, describe, sensitivity_table, with_chosen_sensitivity};
+use bounded_nn::calibration::{self, with_chosen_sensitivity};
 use bounded_nn::fit::{self, FeatureSet, Schedule, Seconds, Widths, columns};
 use bounded_nn::report::{
     self, FeaturedCloud, MethodResults, ModelResult, confusion_table, median_scores, medians_table,
     per_model_table, pooled,
 };
-use bounded_nn::{Classifier, Detector};
+use bounded_nn::{Classifier, Detector, EmbeddedModel};
 use std::fmt::Write;
 use std::path::Path;
 use std::time::Instant;
@@ -293,6 +293,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let boundary = score(&ours_scorer, &full, &sets[3])?;
     let b = MethodResults::of("BoundED-rs (ours)", &boundary, Class::Boundary);
     let open = b.with_positives("BoundED-rs (ours), the clouds with boundaries");
+    let boundary_f1 = pooled(&boundary).binary(Class::Boundary as u8).f1();
     let _ = writeln!(
         report,
         "## Boundaries (generated set, seed {}, {} clouds, never trained on)\n\n\
@@ -302,7 +303,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         BOUNDARY_EVAL.0,
         BOUNDARY_EVAL.1,
         medians_table(&[b, open]),
-        pooled(&boundary).binary(Class::Boundary as u8).f1(),
+        boundary_f1,
         confusion_table(&boundary)
     );
     let freeform = score(&ours_scorer, &full, &sets[4])?;
@@ -325,7 +326,20 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             Class::Sharp
         )])
     );
-    report.push_str(&calibration_section(&detector, &sets, on_validation)?);
+    report.push_str(&band_section(&detector, boundary_f1, &sets[3])?);
+    report.push_str(&calibration::section(
+        &detector,
+        &recipe::VALIDATION_SETS.join(", "),
+        on_validation,
+        &(sets.iter())
+            .map(|s| {
+                (
+                    s.key,
+                    s.clouds.iter().map(FeaturedCloud::labelled).collect(),
+                )
+            })
+            .collect::<Vec<_>>(),
+    )?);
     report.push_str(&scans_section(&detector, &args.data, &args.output)?);
     let _ = writeln!(
         report,
@@ -339,36 +353,47 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// Calibration on the generated validation clouds (`on_validation`, measured when the main
-/// model's decision was chosen: the training kinds and noise, other seeds), the decision they
-/// chose (the model's default), and MCC against the
-/// sensitivity on every evaluation set, for a user to choose a trade-off.
-fn calibration_section(
-    detector: &Detector,
-    sets: &[EvalSet],
-    on_validation: Calibration,
-) -> Result<String> {
-    let chosen = describe(detector.sensitivity());
-    let mut out = format!(
-        "## Calibration and sensitivity
+/// The sets of the band section: never trained on by either embedded model, labelled in bands
+/// (`band=`; the free-form kind's default is 1) and in one row.
+const BAND_SETS: [&str; 5] = [
+    "generated:freeform:1003:30",
+    "generated:freeform:1003:30:band=1.5",
+    "generated:cad:1002:30:band=1.5",
+    "generated:cad:1002:30",
+    "generated:random:1002:30:band=1.5",
+];
 
-Validation clouds ({}, training noise): expected \
-         calibration error of p_sharp {:.4}, of p_boundary {:.4}; the highest median sharp MCC \
-         at {chosen}, which the model records as its default decision (every table above; \
-         `--sensitivity` overrides it).\n\n\
-         p_sharp reliability on them:\n\n{}\nMedian sharp MCC against `--sensitivity`:\n\n",
-        recipe::VALIDATION_SETS.join(", "),
-        on_validation.sharp.expected_calibration_error(),
-        on_validation.boundary.expected_calibration_error(),
-        on_validation.sharp.table()
-    );
-    let mut rows = vec![("validation", on_validation)];
-    for set in sets {
-        let clouds: Vec<_> = set.clouds.iter().map(FeaturedCloud::labelled).collect();
-        rows.push((set.key, Calibration::measure(detector, &clouds)?));
+/// The embedded band model, as shipped, beside the main model (`main`, boundary F1
+/// `main_boundary_f1` on the boundary set `boundary`) on [`BAND_SETS`].
+fn band_section(main: &Detector, main_boundary_f1: f64, boundary: &EvalSet) -> Result<String> {
+    let band = Detector::embedded_model(EmbeddedModel::Band)?;
+    let mut methods = Vec::new();
+    for spec in BAND_SETS {
+        let clouds = synth::generate(&SetConfig::from_spec(spec)?)?;
+        for (name, detector) in [("main", main), ("band", &band)] {
+            let results = report::evaluate(detector, &training_clouds(&clouds), &mut |_, _| {})?;
+            let name = format!("{name} model, {spec}");
+            methods.push(MethodResults::of(&name, &results, Class::Sharp));
+        }
     }
-    out.push_str(&sensitivity_table(&rows));
-    Ok(out)
+    let clouds: Vec<_> = boundary
+        .clouds
+        .iter()
+        .map(FeaturedCloud::labelled)
+        .collect();
+    let band_boundary = report::evaluate(&band, &clouds, &mut |_, _| {})?;
+    Ok(format!(
+        "\n## The band model (`--embedded band`)\n\nThe second embedded model, as shipped (trained \
+         by the command in docs/model.md, not here), calls every point within 1.5 spacings of \
+         a crease or feature curve sharp. Beside the main model on generated sets that neither \
+         was trained on, labelled in bands (`band=` spacings either side; the free-form \
+         kind's default is 1) and in one row. Sharp edge positive:\n\n{}\nBoundary F1 over \
+         all points of the boundary set (seed {}): main model {main_boundary_f1:.3}, band \
+         model {:.3}.\n",
+        medians_table(&methods),
+        BOUNDARY_EVAL.0,
+        pooled(&band_boundary).binary(Class::Boundary as u8).f1()
+    ))
 }
 
 /// The unlabelled real scans of `data/scans`, pictured before and after detection.

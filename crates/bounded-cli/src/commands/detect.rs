@@ -6,22 +6,24 @@ use super::{peak_memory, rate};
 use crate::cli::DetectArgs;
 use crate::pipeline;
 use crate::progress;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use bounded_data::DataError;
 use bounded_data::annotate::AnnotateOptions;
-use bounded_data::format::{self, Format};
+use bounded_data::format;
 use bounded_geom::GeomError;
 use bounded_nn::Detector;
 use bounded_nn::calibration::describe;
 use bounded_nn::report::grouped;
-use bounded_survey::{Event, Options, Plan, ReadOptions, SurveyError, TileReport};
+use bounded_survey::{
+    Event, Options, Plan, ReadOptions, SurveyError, TileReport, output_paths, stdout_format,
+};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub fn run(args: &DetectArgs) -> Result<()> {
     let start = Instant::now();
     // Fail on unknown formats and unusable outputs before any work is done.
-    let outputs = output_paths(args)?;
+    let outputs = output_paths(&args.inputs, &args.output, args.format.as_deref())?;
     let detector = pipeline::detector(&args.model)?;
     let read = ReadOptions {
         drop_non_finite: args.drop_non_finite,
@@ -105,7 +107,7 @@ fn label_stream(
     format::drop_annotated(&mut table);
     let d = pipeline::detect(detector, &table.cloud, true).context(input.display().to_string())?;
     let (classes, probabilities) = (&d.classes, &d.probabilities);
-    match stdout_format(args, output)? {
+    match stdout_format(input, output, args.format.as_deref())? {
         Some(f) => {
             let stdout = std::io::stdout().lock();
             format::write_annotated_to(
@@ -200,117 +202,4 @@ fn hint(e: SurveyError) -> anyhow::Error {
         _ => return e.into(),
     }
     anyhow::anyhow!("{e} (--drop-non-finite leaves such points out)")
-}
-
-/// Where each input's result goes, and whether into a directory: `--output` for one input,
-/// unless it is a directory (or ends with a separator); else a file of the input's name in
-/// that directory, which is created only when the results are written, so a failed run
-/// leaves nothing behind. Checked before any work: known formats, an existing parent (for a
-/// directory, its nearest existing ancestor is a directory), no two inputs to one file, no
-/// input replaced by another's result.
-fn output_paths(args: &DetectArgs) -> Result<Vec<PathBuf>> {
-    let output = &args.output;
-    if output == Path::new("-") {
-        if args.inputs.len() != 1 {
-            bail!(
-                "-o - (standard output) takes one input, not {}",
-                args.inputs.len()
-            );
-        }
-        stdout_format(args, output)?;
-        return Ok(vec![output.clone()]);
-    }
-    let names_directory =
-        output.is_dir() || (output.to_str()).is_some_and(|s| s.ends_with(std::path::is_separator));
-    if args.inputs.len() == 1 && !names_directory {
-        if args.format.is_some() {
-            bail!(
-                "--format is for a directory output; {} names a file, whose extension gives the format",
-                output.display()
-            );
-        }
-        Format::from_path(output)?;
-        let parent = match output.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        if !parent.is_dir() {
-            bail!("{}: output directory does not exist", parent.display());
-        }
-        refuse_replacing_input(&args.inputs[0], output)?;
-        bounded_geom::atomic::probe(output)?;
-        return Ok(vec![output.clone()]);
-    }
-    if output.exists() && !output.is_dir() {
-        bail!(
-            "{}: several inputs need a directory output, and this is a file",
-            output.display()
-        );
-    }
-    let mut outputs: Vec<PathBuf> = Vec::with_capacity(args.inputs.len());
-    for input in &args.inputs {
-        let name = (input.file_name())
-            .filter(|_| input != Path::new("-"))
-            .with_context(|| format!("{}: no file name to write under", input.display()))?;
-        let mut path = output.join(name);
-        if let Some(ext) = &args.format {
-            // `--format .las` means the extension, not `name..las`.
-            path.set_extension(ext.trim_start_matches('.'));
-        }
-        Format::from_path(&path)?;
-        if outputs.contains(&path) {
-            bail!(
-                "{}: another input is written to {} too; rename one",
-                input.display(),
-                path.display()
-            );
-        }
-        for input in &args.inputs {
-            refuse_replacing_input(input, &path)?;
-        }
-        outputs.push(path);
-    }
-    let existing = (output.ancestors()).find(|a| !a.as_os_str().is_empty() && a.exists());
-    match existing {
-        Some(file) if !file.is_dir() => bail!(
-            "cannot create {}: {} is not a directory",
-            output.display(),
-            file.display()
-        ),
-        Some(directory) => writable(directory)?,
-        None => writable(Path::new("."))?,
-    }
-    Ok(outputs)
-}
-
-/// The format of `output` when it is `-` (standard output): `--format`, else the input's.
-fn stdout_format(args: &DetectArgs, output: &Path) -> Result<Option<Format>> {
-    if output != Path::new("-") {
-        return Ok(None);
-    }
-    let named = match (&args.format, args.inputs[0].as_path()) {
-        (Some(ext), _) => Path::new("-").with_extension(ext.trim_start_matches('.')),
-        (None, input) if input != Path::new("-") => input.to_path_buf(),
-        _ => bail!("standard output has no extension: --format names its format (ply, las, ...)"),
-    };
-    Ok(Some(Format::from_path(&named)?))
-}
-
-/// Refuses an `output` that is `input` itself (by file identity, so a hard link or another
-/// spelling of the path counts too): the result would replace the data it is computed from.
-fn refuse_replacing_input(input: &Path, output: &Path) -> Result<()> {
-    if bounded_geom::atomic::same_file(input, output) {
-        bail!(
-            "{}: the output {} is this input; its result would replace it (choose another \
-             output or --format)",
-            input.display(),
-            output.display()
-        );
-    }
-    Ok(())
-}
-
-/// Fails now, before any work, when no file can be created in `directory`.
-fn writable(directory: &Path) -> Result<()> {
-    Ok(bounded_geom::atomic::probe(&directory.join("probe"))?)
 }

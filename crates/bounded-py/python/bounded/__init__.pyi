@@ -30,9 +30,13 @@ class Model:
     trained with."""
 
     @staticmethod
-    def embedded() -> Model:
-        """The model built into the package: two stages, scales 128, 64, 32, 16, trained on
-        generated clouds only."""
+    def embedded(name: Literal["row", "band"] = "row") -> Model:
+        """A model built into the package: ``"row"`` (the default) calls one row of points
+        along each crease, as the PCEDNet and ABC clouds are labelled; ``"band"`` calls a band
+        3 spacings wide, as feature curves are often labelled. Both have two stages at 16
+        scales from 128 down to 10 neighbours, trained on generated clouds only.
+
+        Raises ``ValueError`` for another name."""
     @staticmethod
     def load(path: _Path) -> Model:
         """Reads a ``.bmodel`` file written by ``bounded train``.
