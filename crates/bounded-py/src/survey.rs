@@ -43,7 +43,8 @@ pub fn plan_survey(
 /// Labels tile ``tile`` of ``plan`` (as ``plan_survey`` returns it) with the halo that makes
 /// its labels those of the whole survey labelled as one cloud, and writes it to ``output``
 /// (atomically, so a retried task rewrites the same file). The options are ``detect``'s
-/// and ``bounded detect``'s; ``radius`` is the first halo radius (default: estimated);
+/// and ``bounded detect``'s (``model`` a model file's path, ``embedded`` the name of an
+/// embedded model, ``Model.embedded``'s); ``radius`` is the first halo radius (default: estimated);
 /// ``block_points`` is ``bounded detect --block-points``: a plan of one LAS or LAZ file of
 /// more points is labelled in spatial blocks of about this many, in a block's memory.
 ///
@@ -52,8 +53,8 @@ pub fn plan_survey(
 /// ``seconds``. The GIL is released while it works.
 #[pyfunction]
 #[pyo3(signature = (
-    plan, tile, output, *, model = None, scales = None, sensitivity = None, fast = false,
-    drop_non_finite = false, radius = None, block_points = None, threads = None
+    plan, tile, output, *, model = None, embedded = None, scales = None, sensitivity = None,
+    fast = false, drop_non_finite = false, radius = None, block_points = None, threads = None
 ))]
 #[allow(clippy::too_many_arguments)] // Python keyword arguments, one per option.
 pub fn detect_tile<'py>(
@@ -62,6 +63,7 @@ pub fn detect_tile<'py>(
     tile: usize,
     output: PathBuf,
     model: Option<PathBuf>,
+    embedded: Option<String>,
     scales: Option<Vec<usize>>,
     sensitivity: Option<Sensitivity>,
     fast: bool,
@@ -79,9 +81,14 @@ pub fn detect_tile<'py>(
         })
         .collect();
     let plan = Plan::new(inputs).map_err(survey_error)?;
-    let model = match model {
-        Some(path) => Model::load(py, path)?,
-        None => Model::embedded("row")?,
+    let model = match (model, embedded) {
+        (Some(path), None) => Model::load(py, path)?,
+        (None, name) => Model::embedded(name.as_deref().unwrap_or("row"))?,
+        (Some(_), Some(_)) => {
+            return Err(errors::value(
+                "give a model file or an embedded model, not both",
+            ));
+        }
     };
     let detector = model.detector(scales.as_deref(), fast, sensitivity)?;
     let options = Options {

@@ -8,7 +8,7 @@ from dask.distributed import Client, LocalCluster
 
 import bounded
 import bounded.distributed
-from conftest import open_box, run_cli
+from conftest import REPO, open_box, run_cli
 
 
 def write_tiles(directory, xyz, cells):
@@ -67,6 +67,19 @@ def test_one_tile_with_a_small_first_halo_grows_it(survey, tmp_path):
     assert (tmp_path / "tile11.ply").read_bytes() == cli[3].read_bytes()
     with pytest.raises(ValueError, match="no tile 4"):
         bounded.detect_tile(plan, 4, tmp_path / "none.ply")
+
+
+def test_a_tile_by_the_embedded_band_model_is_the_band_file_s(survey, tmp_path):
+    tiles, cli = survey
+    plan = bounded.plan_survey(tiles)
+    band_file = REPO / "crates" / "bounded-nn" / "models" / "band.bmodel"
+    bounded.detect_tile(plan, 1, tmp_path / "by_name.ply", embedded="band")
+    bounded.detect_tile(plan, 1, tmp_path / "by_file.ply", model=band_file)
+    by_name = (tmp_path / "by_name.ply").read_bytes()
+    assert by_name == (tmp_path / "by_file.ply").read_bytes()
+    assert by_name != cli[1].read_bytes()
+    with pytest.raises(ValueError, match="not both"):
+        bounded.detect_tile(plan, 1, tmp_path / "x.ply", model=band_file, embedded="band")
 
 
 

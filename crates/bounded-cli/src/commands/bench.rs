@@ -389,7 +389,7 @@ fn band_section(main: &Detector, main_boundary_f1: f64, boundary: &EvalSet) -> R
          was trained on, labelled in bands (`band=` spacings either side; the free-form \
          kind's default is 1) and in one row. Sharp edge positive:\n\n{}\nBoundary F1 over \
          all points of the boundary set (seed {}): main model {main_boundary_f1:.3}, band \
-         model {:.3}.\n",
+         model {:.3}.\n\n",
         medians_table(&methods),
         BOUNDARY_EVAL.0,
         pooled(&band_boundary).binary(Class::Boundary as u8).f1()

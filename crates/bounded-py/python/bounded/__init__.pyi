@@ -150,6 +150,7 @@ def detect_tile(
     output: _Path,
     *,
     model: _Path | None = None,
+    embedded: Literal["row", "band"] | None = None,
     scales: Sequence[int] | None = None,
     sensitivity: float | Literal["argmax"] | None = None,
     fast: bool = False,
@@ -160,5 +161,6 @@ def detect_tile(
 ) -> dict[str, float]:
     """Labels tile ``tile`` of ``plan`` with the halo that makes its labels those of the whole
     survey labelled as one cloud, and writes it to ``output`` (atomically: a retried task
-    rewrites the same file). Returns ``points``, ``halo``, ``labelled``, ``radius``,
+    rewrites the same file), by the model file ``model`` or the embedded model ``embedded``
+    (``Model.embedded``'s names; default ``"row"``). Returns ``points``, ``halo``, ``labelled``, ``radius``,
     ``attempts``, ``detection_seconds`` and ``seconds``. The GIL is released while it works."""

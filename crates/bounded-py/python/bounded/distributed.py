@@ -29,7 +29,7 @@ def detect_tiles(inputs, output_dir, client=None, *, format=None, **options):
 
     ``client`` is a ``dask.distributed.Client``; without one, a ``LocalCluster`` is started
     and closed afterwards. ``options`` are ``bounded.detect_tile``'s: ``model`` (a model file's
-    path), ``scales``, ``sensitivity``, ``fast``, ``drop_non_finite``, ``radius``,
+    path) or ``embedded`` (``"row"`` or ``"band"``), ``scales``, ``sensitivity``, ``fast``, ``drop_non_finite``, ``radius``,
     ``block_points`` (a single LAS or LAZ file of more points is one task that labels it in
     spatial blocks) and ``threads`` (per task).
     """
