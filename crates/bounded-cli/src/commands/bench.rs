@@ -396,16 +396,21 @@ fn band_section(main: &Detector, main_boundary_f1: f64, boundary: &EvalSet) -> R
     ))
 }
 
-/// The unlabelled real scans of `data/scans`, pictured before and after detection.
+/// The unlabelled real scans of `data/scans`, pictured before and after detection by the main
+/// model and by the embedded band model.
 fn scans_section(detector: &Detector, data: &Path, output: &Path) -> Result<String> {
-    let mut out = String::from("\n## Real scans (no labels): before and after detection\n\n");
+    let mut out = String::from(
+        "\n## Real scans (no labels): before and after detection (main model, band model)\n\n",
+    );
     let view = View::default();
+    let band = Detector::embedded_model(EmbeddedModel::Band)?;
     for name in ["room_scan1", "CSite1_red1-utm"] {
         let cloud = bounded_data::format::read(&data.join(format!("scans/{name}.pcd")))?.cloud;
         let before = vec![Class::NonEdge; cloud.len()];
         let after = detector.detect(&cloud)?.classes;
+        let band = band.detect(&cloud)?.classes;
         let _ = write!(out, "{name}.pcd, {} points:", cloud.len());
-        for (side, classes) in [("before", before), ("after", after)] {
+        for (side, classes) in [("before", before), ("after", after), ("band", band)] {
             let file = format!("scan_{name}_{side}.png");
             render_classes(&cloud, &classes, view, 1024, 768).save_png(&output.join(&file))?;
             let _ = write!(out, " ![{side}]({file})");
