@@ -148,6 +148,13 @@ fn the_band_model_is_chosen_by_name_and_calls_wider_creases() {
         "{}",
         stderr(&run)
     );
+    // A model file called as an embedded model, where there is none, is pointed to it.
+    let run = bounded_paths(&[&"detect", &input, &"-o", &output, &"--model", &"band"]);
+    assert!(
+        stderr(&run).contains("(--embedded band names"),
+        "{}",
+        stderr(&run)
+    );
 }
 
 fn positions(table: &PointTable) -> Vec<[f64; 3]> {

@@ -4,7 +4,7 @@ use crate::cli::ModelArgs;
 use crate::progress;
 use anyhow::{Context, Result};
 use bounded_geom::PointCloud;
-use bounded_nn::{Detection, Detector};
+use bounded_nn::{Detection, Detector, EmbeddedModel};
 
 /// The detector of the model options (the default ones: the embedded model as it is).
 pub fn detector(options: &ModelArgs) -> Result<Detector> {
@@ -16,9 +16,15 @@ pub fn detector(options: &ModelArgs) -> Result<Detector> {
         sensitivity,
     } = options;
     let mut detector = match model {
-        Some(p) => {
-            Detector::load(p).with_context(|| format!("cannot load model {}", p.display()))?
-        }
+        Some(p) => Detector::load(p).with_context(|| {
+            // `--model band` where `--embedded band` was meant.
+            let embedded = p.to_str().and_then(|s| s.parse::<EmbeddedModel>().ok());
+            let hint = match embedded {
+                Some(m) if !p.exists() => format!(" (--embedded {m} names the embedded model)"),
+                _ => String::new(),
+            };
+            format!("cannot load model {}{hint}", p.display())
+        })?,
         None => Detector::embedded_model(embedded.unwrap_or_default())
             .context("cannot load the embedded model")?,
     };

@@ -6,7 +6,7 @@
 
 use bounded_data::DataError;
 use bounded_geom::GeomError;
-use bounded_nn::NnError;
+use bounded_nn::{EmbeddedModel, NnError};
 use pyo3::PyErr;
 use pyo3::exceptions::{
     PyFileExistsError, PyFileNotFoundError, PyIsADirectoryError, PyNotADirectoryError, PyOSError,
@@ -45,9 +45,15 @@ pub fn value(error: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(error.to_string())
 }
 
-/// A model file that cannot be loaded, named as the CLI names it.
+/// A model file that cannot be loaded, named as the CLI names it; a missing file named as an
+/// embedded model is pointed to `Model.embedded`.
 pub fn model_file(path: &std::path::Path, error: NnError) -> PyErr {
-    let message = format!("cannot load model {}: {error}", path.display());
+    let embedded = path.to_str().and_then(|s| s.parse::<EmbeddedModel>().ok());
+    let hint = match embedded {
+        Some(m) if !path.exists() => format!(" (Model.embedded(\"{m}\") is the embedded model)"),
+        _ => String::new(),
+    };
+    let message = format!("cannot load model {}: {error}{hint}", path.display());
     match &error {
         NnError::Io(source) => os_error(source, message),
         _ => PyValueError::new_err(message),

@@ -262,6 +262,8 @@ def test_the_band_model_calls_wider_edges_than_the_row_model(box):
     assert band_sharp > 1.5 * row_sharp > 0
     with pytest.raises(ValueError, match="no embedded model is called `bands`"):
         bounded.Model.embedded("bands")
+    with pytest.raises(FileNotFoundError, match=r'Model.embedded\("band"\) is the embedded'):
+        bounded.detect(box, model="band")
 
 
 def test_model_files_that_cannot_be_used(tmp_path):
