@@ -108,7 +108,6 @@ fn detect_writes_positions_back_at_full_precision() {
     assert_eq!(positions(&format::read(&output).unwrap()), shifted);
 }
 
-/// The positions of a table as read: the exact ones if it keeps them, else the cloud's.
 #[test]
 fn the_band_model_is_chosen_by_name_and_calls_wider_creases() {
     let dir = tempfile::tempdir().unwrap();
@@ -157,6 +156,7 @@ fn the_band_model_is_chosen_by_name_and_calls_wider_creases() {
     );
 }
 
+/// The positions of a table as read: the exact ones if it keeps them, else the cloud's.
 fn positions(table: &PointTable) -> Vec<[f64; 3]> {
     match &table.exact_positions {
         Some(exact) => (0..exact.len()).map(|i| exact.get(i)).collect(),
