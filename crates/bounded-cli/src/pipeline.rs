@@ -17,12 +17,9 @@ pub fn detector(options: &ModelArgs) -> Result<Detector> {
     } = options;
     let mut detector = match model {
         Some(p) => Detector::load(p).with_context(|| {
-            // `--model band` where `--embedded band` was meant.
-            let embedded = p.to_str().and_then(|s| s.parse::<EmbeddedModel>().ok());
-            let hint = match embedded {
-                Some(m) if !p.exists() => format!(" (--embedded {m} names the embedded model)"),
-                _ => String::new(),
-            };
+            let hint = EmbeddedModel::named_by(p).map_or(String::new(), |m| {
+                format!(" (--embedded {m} names the embedded model)")
+            });
             format!("cannot load model {}{hint}", p.display())
         })?,
         None => Detector::embedded_model(embedded.unwrap_or_default())

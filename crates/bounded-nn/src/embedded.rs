@@ -9,6 +9,7 @@
 
 use crate::{Classifier, NnError};
 use std::fmt;
+use std::path::Path;
 use std::str::FromStr;
 
 /// One of the embedded models; [`EmbeddedModel::Row`] is the default.
@@ -33,6 +34,15 @@ impl EmbeddedModel {
             Self::Row => "row",
             Self::Band => "band",
         }
+    }
+
+    /// The embedded model that `path` names when no file is there (`band` where `--embedded
+    /// band` was meant): for a hint beside the error of loading it as a model file.
+    pub fn named_by(path: &Path) -> Option<Self> {
+        if path.exists() {
+            return None;
+        }
+        path.to_str()?.parse().ok()
     }
 
     /// The model's classifier (two stages, 16 scales from 128 down to 10 neighbours).
@@ -131,6 +141,16 @@ mod tests {
             assert_eq!(which.name().parse::<EmbeddedModel>().unwrap(), which);
         }
         assert_eq!(EmbeddedModel::default(), EmbeddedModel::Row);
+        assert_eq!(
+            EmbeddedModel::named_by(Path::new("band")),
+            Some(EmbeddedModel::Band)
+        );
+        assert_eq!(EmbeddedModel::named_by(Path::new("bands")), None);
+        // An existing file of that name is a model file, not a mistake.
+        assert_eq!(
+            EmbeddedModel::named_by(Path::new(env!("CARGO_MANIFEST_DIR"))),
+            None
+        );
         let e = "bands".parse::<EmbeddedModel>().unwrap_err().to_string();
         assert!(
             e.contains("`bands`") && e.contains("`row` and `band`"),

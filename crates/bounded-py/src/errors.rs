@@ -48,11 +48,9 @@ pub fn value(error: impl std::fmt::Display) -> PyErr {
 /// A model file that cannot be loaded, named as the CLI names it; a missing file named as an
 /// embedded model is pointed to `Model.embedded`.
 pub fn model_file(path: &std::path::Path, error: NnError) -> PyErr {
-    let embedded = path.to_str().and_then(|s| s.parse::<EmbeddedModel>().ok());
-    let hint = match embedded {
-        Some(m) if !path.exists() => format!(" (Model.embedded(\"{m}\") is the embedded model)"),
-        _ => String::new(),
-    };
+    let hint = EmbeddedModel::named_by(path).map_or(String::new(), |m| {
+        format!(" (Model.embedded(\"{m}\") is the embedded model)")
+    });
     let message = format!("cannot load model {}: {error}{hint}", path.display());
     match &error {
         NnError::Io(source) => os_error(source, message),

@@ -326,7 +326,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             Class::Sharp
         )])
     );
-    report.push_str(&band_section(&detector, boundary_f1, &sets[3])?);
+    let band = Detector::embedded_model(EmbeddedModel::Band)?;
+    report.push_str(&band_section(&detector, &band, boundary_f1, &sets[3])?);
     report.push_str(&calibration::section(
         &detector,
         &recipe::VALIDATION_SETS.join(", "),
@@ -340,7 +341,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             })
             .collect::<Vec<_>>(),
     )?);
-    report.push_str(&scans_section(&detector, &args.data, &args.output)?);
+    report.push_str(&scans_section(&detector, &band, &args.data, &args.output)?);
     let _ = writeln!(
         report,
         "\nBench wall time: {:.1} min.",
@@ -363,14 +364,18 @@ const BAND_SETS: [&str; 5] = [
     "generated:random:1002:30:band=1.5",
 ];
 
-/// The embedded band model, as shipped, beside the main model (`main`, boundary F1
+/// The embedded band model `band`, as shipped, beside the main model (`main`, boundary F1
 /// `main_boundary_f1` on the boundary set `boundary`) on [`BAND_SETS`].
-fn band_section(main: &Detector, main_boundary_f1: f64, boundary: &EvalSet) -> Result<String> {
-    let band = Detector::embedded_model(EmbeddedModel::Band)?;
+fn band_section(
+    main: &Detector,
+    band: &Detector,
+    main_boundary_f1: f64,
+    boundary: &EvalSet,
+) -> Result<String> {
     let mut methods = Vec::new();
     for spec in BAND_SETS {
         let clouds = synth::generate(&SetConfig::from_spec(spec)?)?;
-        for (name, detector) in [("main", main), ("band", &band)] {
+        for (name, detector) in [("main", main), ("band", band)] {
             let results = report::evaluate(detector, &training_clouds(&clouds), &mut |_, _| {})?;
             let name = format!("{name} model, {spec}");
             methods.push(MethodResults::of(&name, &results, Class::Sharp));
@@ -381,7 +386,7 @@ fn band_section(main: &Detector, main_boundary_f1: f64, boundary: &EvalSet) -> R
         .iter()
         .map(FeaturedCloud::labelled)
         .collect();
-    let band_boundary = report::evaluate(&band, &clouds, &mut |_, _| {})?;
+    let band_boundary = report::evaluate(band, &clouds, &mut |_, _| {})?;
     Ok(format!(
         "\n## The band model (`--embedded band`)\n\nThe second embedded model, as shipped (trained \
          by the command in docs/model.md, not here), calls every point within 1.5 spacings of \
@@ -397,13 +402,17 @@ fn band_section(main: &Detector, main_boundary_f1: f64, boundary: &EvalSet) -> R
 }
 
 /// The unlabelled real scans of `data/scans`, pictured before and after detection by the main
-/// model and by the embedded band model.
-fn scans_section(detector: &Detector, data: &Path, output: &Path) -> Result<String> {
+/// model `detector` and by the embedded band model `band`.
+fn scans_section(
+    detector: &Detector,
+    band: &Detector,
+    data: &Path,
+    output: &Path,
+) -> Result<String> {
     let mut out = String::from(
         "\n## Real scans (no labels): before and after detection (main model, band model)\n\n",
     );
     let view = View::default();
-    let band = Detector::embedded_model(EmbeddedModel::Band)?;
     for name in ["room_scan1", "CSite1_red1-utm"] {
         let cloud = bounded_data::format::read(&data.join(format!("scans/{name}.pcd")))?.cloud;
         let before = vec![Class::NonEdge; cloud.len()];
