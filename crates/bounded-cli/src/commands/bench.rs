@@ -66,12 +66,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         runs: 1,
         ..schedule
     };
-    // At 16 scales (2026-12-05): quick mode took 9.4 minutes, full mode 94.8 (10.1 GiB peak),
-    // 55 of them training the main model two runs at a time.
+    // At 16 scales: quick mode took 9.4 minutes (2026-12-05), full mode 94.8 (10.1 GiB peak),
+    // 55 of them training the main model two runs at a time, and 110.2 on a slower day
+    // (2026-12-06, docs/performance.md).
     let (mode, duration) = if args.quick {
         ("quick", "about 10 minutes")
     } else {
-        ("full", "about 1.5 hours")
+        ("full", "1.5 to 2 hours")
     };
     eprintln!(
         "bench: {mode} mode, expected duration {duration} on 2 cores (full mode peaks near 11 GB of memory)"
