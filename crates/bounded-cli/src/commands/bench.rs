@@ -66,9 +66,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         runs: 1,
         ..schedule
     };
-    // At 16 scales: quick mode took 9.4 minutes (2026-12-05), full mode 94.8 (10.1 GiB peak),
-    // 55 of them training the main model two runs at a time, and 110.2 on a slower day
-    // (2026-12-06, docs/performance.md).
+    // At 16 scales (2026-12-05): quick mode took 9.4 minutes, full mode 94.8 (10.1 GiB peak),
+    // 55 of them training the main model two runs at a time; on a slower day (2026-12-06)
+    // full mode took 110.2 (docs/performance.md).
     let (mode, duration) = if args.quick {
         ("quick", "about 10 minutes")
     } else {
