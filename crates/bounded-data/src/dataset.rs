@@ -393,6 +393,11 @@ mod tests {
         let config = SetConfig::from_spec("generated:freeform:4:8:angle=20:noise=3").unwrap();
         assert_eq!(config.label_rule.min_angle, 20.0);
         assert_eq!(config.label_rule.min_depth_per_noise, 3.0);
+        let config = SetConfig::from_spec("generated:freeform:4:8:size=3").unwrap();
+        assert_eq!(
+            (config.feature_size, config.label_rule),
+            (3.0, LabelRule::default())
+        );
         // The mesh kinds' sparse planes.
         let config = SetConfig::from_spec("generated:cad:5:8:faces=3").unwrap();
         assert_eq!(config.face_spacing, 3.0);
@@ -403,7 +408,7 @@ mod tests {
             ),
             (
                 "generated:cad:1:2:depth=1",
-                "depth= is a label rule of the freeform kind",
+                "depth= is an option of the freeform kind",
             ),
             (
                 "generated:freeform:1:2:faces=2",
@@ -412,13 +417,18 @@ mod tests {
             ("generated:cad:1:2:faces=0.5", "face spacing 0.5"),
             (
                 "generated:freeform:1:2:3",
-                "\"3\" is not depth=, angle=, band=, noise=, faces= or shallow= a number",
+                "\"3\" is not depth=, angle=, band=, noise=, size=, faces= or shallow= a number",
             ),
             (
                 "generated:freeform:1:2:depth=x",
-                "\"depth=x\" is not depth=, angle=, band=, noise=, faces= or shallow= a number",
+                "\"depth=x\" is not depth=, angle=, band=, noise=, size=, faces= or shallow= a number",
             ),
             ("generated:freeform:1:2:band=0", "label band 0"),
+            ("generated:freeform:1:2:size=9", "feature size 9"),
+            (
+                "generated:cad:1:2:size=2",
+                "size= is an option of the freeform kind",
+            ),
             (
                 "generated:freeform:1:2:noise=-1",
                 "label min_depth_per_noise -1",

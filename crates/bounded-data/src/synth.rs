@@ -182,11 +182,17 @@ pub struct SetConfig {
     pub shallow: f64,
     /// The mesh kinds' sharp band ([`ShapeSpec::band`]): `None`, the default, labels one row.
     pub band: Option<f64>,
+    /// The free-form kind's [`FreeformSpec::feature_size`] (1, the default, draws as before).
+    pub feature_size: f64,
 }
 
 /// The largest [`SetConfig::shallow`]: a set of nothing but shallow ridges teaches nothing
 /// of the other creases.
 pub const MAX_SHALLOW: f64 = 1000.0;
+
+/// The largest [`SetConfig::feature_size`]: features 8 times the default's are up to 100
+/// spacings wide, too few of them fit on a cloud of the default size.
+pub const MAX_FEATURE_SIZE: f64 = 8.0;
 
 /// The largest [`SetConfig::face_spacing`]: sparser planes hold almost no points between
 /// their crease rows.
@@ -210,6 +216,7 @@ impl SetConfig {
             face_spacing: 1.0,
             shallow: 0.0,
             band: None,
+            feature_size: 1.0,
         }
     }
 
@@ -228,6 +235,7 @@ impl SetConfig {
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
         check_outlier_fraction(self.outlier_fraction)?;
         check_face_spacing(self.face_spacing)?;
+        check_feature_size(self.feature_size)?;
         self.band.map_or(Ok(()), check_band)?;
         check_within(self.shallow, 0.0..=MAX_SHALLOW, || {
             format!(
@@ -278,6 +286,7 @@ impl SetConfig {
             noise_direction: self.noise_direction,
             outlier_fraction,
             label_rule: self.label_rule,
+            feature_size: self.feature_size,
             seed: rng.random(),
         }
     }
@@ -500,6 +509,14 @@ fn check_face_spacing(spacing: f64) -> Result<(), DataError> {
     })
 }
 
+/// A feature size must lie in `0.25..=MAX_FEATURE_SIZE`: below a quarter, the largest
+/// features are under two spacings wide.
+fn check_feature_size(size: f64) -> Result<(), DataError> {
+    check_within(size, 0.25..=MAX_FEATURE_SIZE, || {
+        format!("feature size {size}: a multiple of the default sizes, 0.25 to {MAX_FEATURE_SIZE}")
+    })
+}
+
 /// An outlier fraction must lie in 0..=1.
 fn check_outlier_fraction(fraction: f64) -> Result<(), DataError> {
     check_within(fraction, 0.0..=1.0, || {
@@ -580,7 +597,8 @@ impl SetConfig {
 
     /// This set with `options`, each `NAME=NUMBER`, checked: for the free-form kind the
     /// label rules `depth=`, `angle=`, `band=` and `noise=` (its [`LabelRule`]'s
-    /// `min_depth`, `min_angle`, `band` and `min_depth_per_noise`); for the mesh kinds
+    /// `min_depth`, `min_angle`, `band` and `min_depth_per_noise`) and `size=`
+    /// ([`feature_size`](Self::feature_size)); for the mesh kinds
     /// `faces=` ([`face_spacing`](Self::face_spacing)), `shallow=`
     /// ([`shallow`](Self::shallow)) and `band=` ([`band`](Self::band)). An option of the
     /// other kinds is refused.
@@ -590,7 +608,7 @@ impl SetConfig {
         for option in options {
             let not_an_option = || {
                 bad(format!(
-                    "{option:?} is not depth=, angle=, band=, noise=, faces= or shallow= a number"
+                    "{option:?} is not depth=, angle=, band=, noise=, size=, faces= or shallow= a number"
                 ))
             };
             let (name, value) = option.split_once('=').ok_or_else(not_an_option)?;
@@ -602,13 +620,14 @@ impl SetConfig {
                 "band" if !freeform => (self.band.insert(value), false),
                 "band" => (&mut label.band, true),
                 "noise" => (&mut label.min_depth_per_noise, true),
+                "size" => (&mut self.feature_size, true),
                 "faces" => (&mut self.face_spacing, false),
                 "shallow" => (&mut self.shallow, false),
                 _ => return Err(not_an_option()),
             };
             if for_freeform != freeform {
                 return Err(bad(if for_freeform {
-                    format!("{name}= is a label rule of the freeform kind")
+                    format!("{name}= is an option of the freeform kind")
                 } else {
                     format!("{name}= is for the mesh kinds, not freeform")
                 }));

@@ -10,8 +10,8 @@
 //! domain (ledges and creases). Sizes are drawn in units of the expected point spacing:
 //! widths from 0.3 to 6 spacings, wall angles from 5 to 75 degrees (steps up to 80), depths
 //! up to 5 spacings, curves from a few to 150 spacings long, until the features' labelled
-//! area reaches a random 4..25% of the surface. See [`LabelRule`] for the labels and
-//! [`FreeformSampling`] for the sampling.
+//! area reaches a random 4..25% of the surface; [`FreeformSpec::feature_size`] multiplies
+//! all of these. See [`LabelRule`] for the labels and [`FreeformSampling`] for the sampling.
 //!
 //! [`LabelRule`]: super::LabelRule
 
@@ -23,7 +23,7 @@ use super::relief::{Curve, Feature, Graph, LabelRule, Profile, Relief, Side};
 use super::scan::{self, FreeformSampling, Plan};
 use super::segments::CurveTree;
 use super::shapes::detail;
-use super::{NoiseDirection, Pose, check_noise, check_outlier_fraction};
+use super::{NoiseDirection, Pose, check_feature_size, check_noise, check_outlier_fraction};
 use crate::{DataError, LabelledCloud};
 use bounded_geom::PointCloud;
 use bounded_geom::vec3::{V3, add, cross, dot, norm, normalize, scale, sub, tangent_frame};
@@ -104,6 +104,11 @@ pub struct FreeformSpec {
     pub outlier_fraction: f64,
     /// What counts as sharp, and how wide its label is.
     pub label_rule: LabelRule,
+    /// Features' sizes (widths, depths, lengths and gaps) in multiples of the default ones,
+    /// which are drawn in spacings: 3 makes every feature three times as wide, deep and
+    /// long relative to the points. Held-out clouds may carry features larger than the
+    /// default draws (see `docs/model.md`, 2026-12-06); 1 is the default.
+    pub feature_size: f64,
     /// Seed of the shape's geometry, pose and sampling.
     pub seed: u64,
 }
@@ -1016,10 +1021,12 @@ fn word(r: f64, u: f64, rng: &mut impl Rng) -> Vec<Vec<P2>> {
     letters
 }
 
-/// Features placed on `base` until their labelled area reaches a random 4..25% of it.
-pub(crate) fn random_relief(base: Base, unit: f64, rng: &mut impl Rng) -> Relief {
+/// Features placed on `base` until their labelled area reaches a random 4..25% of it, their
+/// sizes drawn in units of `size` x `unit` (the spacing, which stays the unit of the relief's
+/// numerical steps).
+pub(crate) fn random_relief(base: Base, unit: f64, size: f64, rng: &mut impl Rng) -> Relief {
     let budget = rng.random_range(0.1..0.6) * base.area();
-    let mut placer = Placer::new(&base, unit);
+    let mut placer = Placer::new(&base, size * unit);
     let mut used = 0.0;
     for _ in 0..MAX_TRIES {
         if used >= budget {
@@ -1035,9 +1042,10 @@ pub(crate) fn random_relief(base: Base, unit: f64, rng: &mut impl Rng) -> Relief
 /// Generates one labelled free-form cloud.
 ///
 /// Fails when `spec.points` is 0, scan lines are asked of a shell, or the noise, outlier
-/// fraction or label rule is out of range.
+/// fraction, feature size or label rule is out of range.
 pub fn generate_freeform(spec: &FreeformSpec) -> Result<LabelledCloud, DataError> {
     check_noise(spec.noise)?;
+    check_feature_size(spec.feature_size)?;
     check_outlier_fraction(spec.outlier_fraction)?;
     spec.label_rule.validate()?;
     if spec.points == 0 {
@@ -1055,7 +1063,7 @@ pub fn generate_freeform(spec: &FreeformSpec) -> Result<LabelledCloud, DataError
     let pose = Pose::random(&mut rng, 1.0);
     let plan = Plan::random(spec.sampling, &base, spec.points, &mut rng);
     let unit = plan.spacing(base.area(), spec.points);
-    let relief = random_relief(base, unit, &mut rng);
+    let relief = random_relief(base, unit, spec.feature_size, &mut rng);
     let (mut points, mut uvs) = scan::sample(&relief, &plan, spec.points, &mut rng);
     let holes = if rng.random_bool(if plan.is_scan() { 0.6 } else { 0.25 }) {
         rng.random_range(1..=6)
@@ -1147,6 +1155,7 @@ mod tests {
             noise_direction: NoiseDirection::Isotropic,
             outlier_fraction: 0.01,
             label_rule: LabelRule::default(),
+            feature_size: 1.0,
             seed,
         }
     }
@@ -1183,6 +1192,30 @@ mod tests {
             );
             assert!(counts[0] > n / 2, "{base:?} {sampling:?} {counts:?}");
         }
+    }
+
+    #[test]
+    fn feature_size_multiplies_every_drawn_size() {
+        let u = 0.01;
+        for seed in 0..200 {
+            let draw = |unit: f64| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                [
+                    symmetric_profile(unit, &mut rng),
+                    step_profile(unit, &mut rng),
+                ]
+            };
+            for (a, b) in draw(u).iter().zip(draw(3.0 * u)) {
+                assert!((b.reach() / a.reach() - 3.0).abs() < 1e-9, "{a:?} {b:?}");
+                assert!((b.size() / a.size() - 3.0).abs() < 1e-9, "{a:?} {b:?}");
+            }
+        }
+        let bad = FreeformSpec {
+            feature_size: 0.1,
+            ..spec(BaseKind::HeightField, FreeformSampling::Random, 1)
+        };
+        let err = generate_freeform(&bad).unwrap_err().to_string();
+        assert!(err.contains("feature size 0.1"), "{err}");
     }
 
     #[test]

@@ -1334,6 +1334,7 @@ mod tests {
                 let relief = crate::synth::freeform::random_relief(
                     Base::random(base, &mut rng),
                     unit,
+                    1.0,
                     &mut rng,
                 );
                 for (i, f) in relief.features.iter().enumerate() {
