@@ -356,10 +356,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 }
 
 /// The sets of the band section: never trained on by either embedded model, labelled in bands
-/// (`band=`; the free-form kind's default is 1) and in one row.
-const BAND_SETS: [&str; 5] = [
+/// (`band=`; the free-form kind's default is 1) and in one row. The free-form set with
+/// features three times the default size (`size=3`, at least a spacing deep) is the generated
+/// set closest to issue 31's held-out clouds (docs/model.md, 2026-12-06).
+const BAND_SETS: [&str; 6] = [
     "generated:freeform:1003:30",
     "generated:freeform:1003:30:band=1.5",
+    "generated:freeform:1003:30:depth=1:size=3",
     "generated:cad:1002:30:band=1.5",
     "generated:cad:1002:30",
     "generated:random:1002:30:band=1.5",
@@ -393,7 +396,9 @@ fn band_section(
          by the command in docs/model.md, not here), calls every point within 1.5 spacings of \
          a crease or feature curve sharp. Beside the main model on generated sets that neither \
          was trained on, labelled in bands (`band=` spacings either side; the free-form \
-         kind's default is 1) and in one row. Sharp edge positive:\n\n{}\nBoundary F1 over \
+         kind's default is 1) and in one row; `size=3` draws every free-form feature three \
+         times the default size, the generated set closest to the held-out clouds that issue \
+         31 describes (docs/model.md). Sharp edge positive:\n\n{}\nBoundary F1 over \
          all points of the boundary set (seed {}): main model {main_boundary_f1:.3}, band \
          model {:.3}.\n\n",
         medians_table(&methods),
