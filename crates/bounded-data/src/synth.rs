@@ -190,8 +190,8 @@ pub struct SetConfig {
 /// of the other creases.
 pub const MAX_SHALLOW: f64 = 1000.0;
 
-/// The largest [`SetConfig::feature_size`]: features 8 times the default's are up to 100
-/// spacings wide, too few of them fit on a cloud of the default size.
+/// The largest [`SetConfig::feature_size`]: features 8 times the default's are up to about 100
+/// spacings wide (steps 160), and too few of them fit on a cloud of the default size.
 pub const MAX_FEATURE_SIZE: f64 = 8.0;
 
 /// The largest [`SetConfig::face_spacing`]: sparser planes hold almost no points between
