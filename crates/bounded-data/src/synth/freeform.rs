@@ -1210,6 +1210,23 @@ mod tests {
                 assert!((b.size() / a.size() - 3.0).abs() < 1e-9, "{a:?} {b:?}");
             }
         }
+        // Through the placer: the placed features' median reach grows with the size (which
+        // features fit changes too, so not by exactly 3; by exactly 1, the same features from
+        // the same seeds, if the size did not reach the draws).
+        let median_reach = |size: f64| {
+            let mut reach: Vec<f64> = (0..6)
+                .flat_map(|seed| {
+                    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                    let base = Base::random(BaseKind::HeightField, &mut rng);
+                    random_relief(base, u, size, &mut rng).features
+                })
+                .map(|f| f.profile.reach())
+                .collect();
+            reach.sort_by(f64::total_cmp);
+            reach[reach.len() / 2]
+        };
+        let ratio = median_reach(3.0) / median_reach(1.0);
+        assert!(ratio > 2.0, "{ratio}");
         let bad = FreeformSpec {
             feature_size: 0.1,
             ..spec(BaseKind::HeightField, FreeformSampling::Random, 1)
