@@ -190,6 +190,9 @@ pub enum FeatureGroupArg {
     S,
     /// Multi-scale centroid shift (2).
     C,
+    /// How far the point lies inside the hull of its neighbours in the largest
+    /// neighbourhood's tangent plane, over 32 directions (1; not in the paper).
+    H,
 }
 
 /// Arguments of `eval`.

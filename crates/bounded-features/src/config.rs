@@ -6,16 +6,16 @@ use crate::{ContextSet, FeatureError};
 pub const DEFAULT_SCALES: [usize; 4] = [128, 64, 32, 16];
 
 /// Names of every feature of one scale, in output order, when all groups are on.
-const NAMES: [&str; 15] = [
+const NAMES: [&str; 16] = [
     "sigma_1", "sigma_2", "sigma_3", "sigma_u1", "sigma_u2", "sigma_u3", "sigma_l1", "sigma_l2",
-    "sigma_l3", "d_perp", "d_par", "s_perp", "s_par", "c_perp", "c_par",
+    "sigma_l3", "d_perp", "d_par", "s_perp", "s_par", "c_perp", "c_par", "h",
 ];
 
 /// Selection of feature groups, for the paper's feature ablation.
 ///
 /// Output order within a scale is fixed: `sigma` (3), `sigma_u` (3), `sigma_l` (3),
-/// `d` (perp, par), `s` (perp, par), `c` (perp, par), skipping unselected groups.
-/// The default is BoundED's 12 features (everything but `sigma`).
+/// `d` (perp, par), `s` (perp, par), `c` (perp, par), `h`, skipping unselected
+/// groups. The default is BoundED's 12 features (everything but `sigma` and `h`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct FeatureGroups {
     /// Eigenvalues of the whole normalised neighbourhood's covariance (3; off by default,
@@ -31,6 +31,12 @@ pub struct FeatureGroups {
     pub s: bool,
     /// Offset of this scale's centroid from the rest of the largest neighbourhood (2).
     pub c: bool,
+    /// How far the query point lies inside the convex hull of its neighbours in the
+    /// largest neighbourhood's tangent plane, over 32 directions (1; not in the paper): 0
+    /// on a border. A mean such as `s` places a border of randomly sampled points only to
+    /// about the neighbourhood's radius over `sqrt(k)`; the hull's edge runs through the
+    /// outermost points themselves.
+    pub h: bool,
 }
 
 impl FeatureGroups {
@@ -42,6 +48,7 @@ impl FeatureGroups {
         d: true,
         s: true,
         c: true,
+        h: false,
     };
 
     /// No group: a base for selections such as `FeatureGroups { d: true, ..NONE }`.
@@ -52,11 +59,13 @@ impl FeatureGroups {
         d: false,
         s: false,
         c: false,
+        h: false,
     };
 
-    /// Every group: BoundED's and `sigma` (15 values per scale).
+    /// Every group: BoundED's, `sigma` and `h` (16 values per scale).
     pub const ALL: Self = Self {
         sigma: true,
+        h: true,
         ..Self::BOUNDED
     };
 
@@ -91,7 +100,7 @@ impl FeatureGroups {
     };
 
     /// Selection flags with the number of values of each group, in output order.
-    fn flags(&self) -> [(bool, usize); 6] {
+    fn flags(&self) -> [(bool, usize); 7] {
         [
             (self.sigma, 3),
             (self.sigma_u, 3),
@@ -99,6 +108,7 @@ impl FeatureGroups {
             (self.d, 2),
             (self.s, 2),
             (self.c, 2),
+            (self.h, 1),
         ]
     }
 
@@ -247,11 +257,12 @@ mod tests {
             d: false,
             s: true,
             c: false,
+            h: true,
         };
-        assert_eq!(g.count(), 5);
+        assert_eq!(g.count(), 6);
         assert_eq!(
             g.names(),
-            ["sigma_1", "sigma_2", "sigma_3", "s_perp", "s_par"]
+            ["sigma_1", "sigma_2", "sigma_3", "s_perp", "s_par", "h"]
         );
         assert_eq!(FeatureGroups::BOUNDED.names()[0], "sigma_u1");
         assert_eq!(FeatureGroups::BOUNDED.names()[11], "c_par");
@@ -264,7 +275,7 @@ mod tests {
         assert_eq!(FeatureGroups::ABLATION[4].1, FeatureGroups::BOUNDED);
         assert_eq!(
             (FeatureGroups::NONE.count(), FeatureGroups::ALL.count()),
-            (0, 15)
+            (0, 16)
         );
     }
 

@@ -29,13 +29,14 @@
 //!   sorting instead of selecting small half neighbourhoods, and (in `bounded-geom`)
 //!   rows ordered only by scale bands instead of fully sorted.
 
-use bounded_geom::{Eigen3, SmallestFirst, Sym3, dot, eigenvalues_batch};
+use bounded_geom::vec3::{norm, normalize, scale, sub};
+use bounded_geom::{Eigen3, SmallestFirst, Sym3, cross, dot, eigenvalues_batch};
 use pulp::Simd;
 
 use crate::FeatureConfig;
 
 /// Values per scale with every group on (see `config::NAMES`).
-pub(crate) const ALL_FEATURES: usize = 15;
+pub(crate) const ALL_FEATURES: usize = 16;
 
 /// Points computed side by side, one per vector lane.
 pub(crate) const LANES: usize = 8;
@@ -84,6 +85,8 @@ struct Lane {
     frames: Vec<Frame>,
     /// The upper and lower set of each scale, with their variances.
     sides: Vec<[(Moments, [f64; 3]); 2]>,
+    /// Each scale's `h` (see [`hull_insets`]), when that group is selected.
+    hulls: Vec<f64>,
 }
 
 /// Count, sum and sum of outer products of points (relative to the query point, so
@@ -193,6 +196,9 @@ pub(crate) fn group_features(
         let prefix = scratch.prefix.iter().map(|m| &m[l]);
         frames(&config.scales, prefix, solved, lane);
     }
+    if config.groups.h {
+        hull_insets(arch, scratch, count, &config.scales);
+    }
     upper_sets(arch, scratch, count, config);
     let matrices = &mut scratch.matrices;
     matrices.clear();
@@ -263,6 +269,9 @@ fn point_values<'a>(
             let c = [0, 1, 2].map(|a| (frame.mean[a] - rest[a]) * f0.scale);
             [all[13], all[14]] = split(c, f0.normal);
         }
+        if let Some(&h) = lane.hulls.get(i) {
+            all[15] = h;
+        }
         for (o, i) in out.iter_mut().zip(config.groups.selected()) {
             *o = all[i] as f32;
         }
@@ -325,6 +334,160 @@ fn frames<'a>(
         let half = (k / 2 > 0).then(|| matrices[j].eigen_from(values[j]));
         lane.frames.push(frame(m, m.variances(values[i]), half));
     }
+}
+
+/// Each scale's `h` into `lane.hulls` of the first `count` lanes, largest scale first: how
+/// far the query point (the origin of `xyz`) lies inside the convex hull of the scale's
+/// neighbours projected onto the largest neighbourhood's tangent plane, in the scale's
+/// normalised frame, measured as the smallest extent of the neighbours beyond the point
+/// over 32 directions ([`Reaches`]). 0 on a border; inside, a good part of the radius.
+/// Unlike a mean (`s`, `c`) or an extreme along one estimated direction, it needs no
+/// direction to the border: the nearest support line runs through the outermost points,
+/// wherever they lie.
+///
+/// One plane for every scale, so that one running maximum per direction serves all
+/// scales: 16 multiply-adds per neighbour of the largest scale, side by side over the
+/// lanes, where an exact hull per scale sorts each scale's points again (six times the
+/// features' time at 16 scales) and a hull grown over the scales about doubles it. The
+/// directions start at the point's offset from the centroid, so the value turns with
+/// the cloud.
+fn hull_insets(arch: pulp::Arch, scratch: &mut Scratch, count: usize, scales: &[usize]) {
+    let lanes = &mut scratch.lanes[..count];
+    let mut axes = [[[0.0; LANES]; 3]; 2];
+    for (l, lane) in lanes.iter().enumerate() {
+        let Some(f0) = lane.frames.first() else {
+            continue;
+        };
+        let n = f0.normal;
+        let offset = f0.mean.map(|c| -c);
+        let along = sub(offset, scale(n, dot(offset, n)));
+        let t1 = if norm(along) * f0.scale > 1e-9 {
+            normalize(along)
+        } else {
+            any_tangent(n)
+        };
+        for (axis, t) in axes.iter_mut().zip([t1, cross(n, t1)]) {
+            for (a, c) in axis.iter_mut().zip(t) {
+                a[l] = c;
+            }
+        }
+    }
+    let mut insets = vec![[0.0; LANES]; scales.len()];
+    arch.dispatch(Reaches {
+        xyz: &scratch.xyz[..scales.first().copied().unwrap_or(0)],
+        axes,
+        scales,
+        out: &mut insets,
+    });
+    for (l, lane) in lanes.iter_mut().enumerate() {
+        lane.hulls.clear();
+        let per_scale = insets.iter().zip(&lane.frames);
+        lane.hulls
+            .extend(per_scale.map(|(inset, f)| inset[l] * f.scale));
+    }
+}
+
+/// Half the directions of [`Reaches`]: `(cos, sin)` of `pi i / 16`.
+const DIRECTIONS: [[f64; 2]; 16] = {
+    // cos (pi i / 16), i = 0..=8, so that the table is a constant.
+    let q = [
+        1.0,
+        0.980_785_280_403_230_4,
+        0.923_879_532_511_286_7,
+        0.831_469_612_302_545_2,
+        std::f64::consts::FRAC_1_SQRT_2,
+        0.555_570_233_019_602_2,
+        0.382_683_432_365_089_8,
+        0.195_090_322_016_128_3,
+        0.0,
+    ];
+    let mut d = [[0.0; 2]; 16];
+    let mut i = 0;
+    while i < 16 {
+        d[i] = if i <= 8 {
+            [q[i], q[8 - i]]
+        } else {
+            [-q[16 - i], q[i - 8]]
+        };
+        i += 1;
+    }
+    d
+};
+
+/// Each lane's smallest reach of `xyz` at every scale (`scales` largest first, into `out`
+/// in that order): how far the points, projected onto the lane's `axes`, reach beyond
+/// the origin along each of 32 directions (16 and their opposites, every 11.25 degrees),
+/// the least of them. That is the origin's distance to the nearest of 32 support lines,
+/// an upper bound of its distance to the points' convex hull that equals it when the
+/// nearest edge faces one of the directions. The origin belongs to the set: reaches start
+/// at 0.
+struct Reaches<'a> {
+    xyz: &'a [[Lanes; 3]],
+    axes: [[Lanes; 3]; 2],
+    scales: &'a [usize],
+    out: &'a mut [Lanes],
+}
+
+impl pulp::WithSimd for Reaches<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let Self {
+            xyz,
+            axes,
+            scales,
+            out,
+        } = self;
+        let (mut most, mut least) = ([[0.0; LANES]; 16], [[0.0; LANES]; 16]);
+        let mut at = scales.iter().zip(out.iter_mut()).rev().peekable();
+        for (j, xyz) in xyz.iter().enumerate() {
+            for r in 0..registers::<S>(&xyz[0]).len() {
+                // <q, t> as `dot` computes it; axis by axis, no `array::map`, which is not
+                // always inlined and then turns the intrinsics into calls.
+                let c = |v: &Lanes| registers::<S>(v)[r];
+                let along = |t: &[Lanes; 3]| {
+                    let xy = simd.add_f64s(
+                        simd.mul_f64s(c(&xyz[0]), c(&t[0])),
+                        simd.mul_f64s(c(&xyz[1]), c(&t[1])),
+                    );
+                    simd.add_f64s(xy, simd.mul_f64s(c(&xyz[2]), c(&t[2])))
+                };
+                let (u, v) = (along(&axes[0]), along(&axes[1]));
+                for (i, d) in DIRECTIONS.iter().enumerate() {
+                    let w = simd.add_f64s(
+                        simd.mul_f64s(simd.splat_f64s(d[0]), u),
+                        simd.mul_f64s(simd.splat_f64s(d[1]), v),
+                    );
+                    let m = &mut S::as_mut_simd_f64s(&mut most[i]).0[r];
+                    *m = simd.select_f64s(simd.greater_than_f64s(w, *m), w, *m);
+                    let m = &mut S::as_mut_simd_f64s(&mut least[i]).0[r];
+                    *m = simd.select_f64s(simd.less_than_f64s(w, *m), w, *m);
+                }
+            }
+            while let Some((_, out)) = at.next_if(|(k, _)| **k == j + 1) {
+                for (r, out) in S::as_mut_simd_f64s(out).0.iter_mut().enumerate() {
+                    let min = |a, b| simd.select_f64s(simd.less_than_f64s(b, a), b, a);
+                    *out = simd.splat_f64s(f64::INFINITY);
+                    for i in 0..16 {
+                        let (m, l) = (registers::<S>(&most[i])[r], registers::<S>(&least[i])[r]);
+                        *out = min(min(*out, m), simd.sub_f64s(simd.splat_f64s(0.0), l));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A unit vector perpendicular to the unit vector `n`: `n` crossed with the axis it is
+/// least aligned with.
+fn any_tangent(n: [f64; 3]) -> [f64; 3] {
+    let least = (0..3)
+        .min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs()))
+        .unwrap_or(0);
+    let mut axis = [0.0; 3];
+    axis[least] = 1.0;
+    normalize(cross(n, axis))
 }
 
 /// Which side a neighbour exactly on the split plane takes (see [`upper_sets`]): the top bit of
@@ -823,5 +986,123 @@ mod tests {
         }
         // In-plane query point: the first non-zero component decides.
         assert_eq!(orient([0.0, -1.0, 0.0], [1.0, 0.0, 0.0]), [0.0, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn directions_are_every_eleven_and_a_quarter_degrees() {
+        for (i, d) in DIRECTIONS.iter().enumerate() {
+            let a = std::f64::consts::PI * i as f64 / 16.0;
+            assert!(
+                (d[0] - a.cos()).abs() < 1e-15 && (d[1] - a.sin()).abs() < 1e-15,
+                "{i}"
+            );
+        }
+    }
+
+    #[test]
+    fn inset_of_hand_made_sets() {
+        // The origin and `points` in the plane z = 0 in every lane, the axes x and y.
+        let of = |points: &[[f64; 2]]| {
+            let xyz: Vec<[Lanes; 3]> = std::iter::once([0.0, 0.0])
+                .chain(points.iter().copied())
+                .map(|p| [[p[0]; LANES], [p[1]; LANES], [0.0; LANES]])
+                .collect();
+            let axes = [
+                [[1.0; LANES], [0.0; LANES], [0.0; LANES]],
+                [[0.0; LANES], [1.0; LANES], [0.0; LANES]],
+            ];
+            let mut out = [[f64::NAN; LANES]];
+            pulp::Arch::new().dispatch(Reaches {
+                xyz: &xyz,
+                axes,
+                scales: &[xyz.len()],
+                out: &mut out,
+            });
+            assert!(out[0].iter().all(|&v| v == out[0][0]), "{:?}", out[0]);
+            out[0][0]
+        };
+        // The rectangle [-1, 3] x [-2, 1.5] (corners and a point inside): its nearest edge
+        // faces a direction, so the hull's distance 1.
+        let rect = [
+            [-1.0, -2.0],
+            [3.0, -2.0],
+            [3.0, 1.5],
+            [-1.0, 1.5],
+            [1.0, 0.5],
+        ];
+        assert!((of(&rect) - 1.0).abs() < 1e-15, "{}", of(&rect));
+        // The triangle (-3, -1), (3, -1), (0, 0.5): the hull's distance is 1 / sqrt 5 =
+        // 0.447 (edges x + 2y = 1 and -x + 2y = 1, facing 63.4 and 116.6 degrees); the
+        // nearest directions, 67.5 and 112.5 degrees, reach the apex, 0.5 sin 67.5 = 0.462.
+        let tri = [[-3.0, -1.0], [3.0, -1.0], [0.0, 0.5], [0.5, 0.0]];
+        let want = 0.5 * (3.0 * std::f64::consts::PI / 8.0).sin();
+        assert!((of(&tri) - want).abs() < 1e-15, "{}", of(&tri));
+        // The origin as a vertex, points on a line facing a direction, the origin alone: 0.
+        assert_eq!(of(&[[1.0, 0.0], [0.0, 1.0]]), 0.0);
+        assert_eq!(of(&[[-1.0, -1.0], [2.0, 2.0]]), 0.0);
+        assert_eq!(of(&[]), 0.0);
+        // A line facing no direction (y = 2x, its normal at 116.57 degrees): at 112.5
+        // degrees, the nearest, (-1, -2) reaches sqrt 5 sin(26.57 - 22.5 degrees) = 0.159
+        // beyond the origin, where the hull has no area.
+        let line = of(&[[-1.0, -2.0], [2.0, 4.0]]);
+        let want = 5f64.sqrt() * (0.5f64.atan() - std::f64::consts::PI / 8.0).sin();
+        assert!((line - want).abs() < 1e-15, "{line} {want}");
+    }
+
+    #[test]
+    fn reaches_side_by_side_are_the_simple_ones() {
+        // Random points about the origin, other in every lane, other axes too; three
+        // scales: the same bits as the plain loop over directions and points per lane.
+        let mut state = 3u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for _ in 0..50 {
+            let mut xyz = vec![[[0.0; LANES]; 3]; 40];
+            for row in &mut xyz[1..] {
+                for c in row.iter_mut() {
+                    c.iter_mut().for_each(|v| *v = next());
+                }
+            }
+            let mut axes = [[[0.0; LANES]; 3]; 2];
+            for l in 0..LANES {
+                let n = normalize([next(), next(), next()]);
+                let t1 = any_tangent(n);
+                for (axis, t) in axes.iter_mut().zip([t1, cross(n, t1)]) {
+                    (0..3).for_each(|a| axis[a][l] = t[a]);
+                }
+            }
+            let scales = [40, 17, 5];
+            let mut out = [[0.0; LANES]; 3];
+            pulp::Arch::new().dispatch(Reaches {
+                xyz: &xyz,
+                axes,
+                scales: &scales,
+                out: &mut out,
+            });
+            for l in 0..LANES {
+                let axis = |t: &[Lanes; 3]| [t[0][l], t[1][l], t[2][l]];
+                let (t1, t2) = (axis(&axes[0]), axis(&axes[1]));
+                for (&k, got) in scales.iter().zip(&out) {
+                    let flat: Vec<[f64; 2]> = xyz[..k]
+                        .iter()
+                        .map(|q| [dot(axis(q), t1), dot(axis(q), t2)])
+                        .collect();
+                    let reach = |d: [f64; 2]| {
+                        flat.iter()
+                            .map(|p| d[0] * p[0] + d[1] * p[1])
+                            .fold(0.0f64, f64::max)
+                    };
+                    let want = DIRECTIONS
+                        .iter()
+                        .map(|d| reach(*d).min(reach([-d[0], -d[1]])))
+                        .fold(f64::INFINITY, f64::min);
+                    assert_eq!(got[l], want, "lane {l}, scale {k}");
+                }
+            }
+        }
     }
 }

@@ -623,3 +623,89 @@ fn reach_is_the_farthest_neighbour_and_for_the_context_its_neighbours_too() {
         [4.0, 3.0, 3.0, 4.0, 4.0, 3.0, 2.0, 2.0, 3.0, 4.0, 4.0]
     );
 }
+
+#[test]
+fn hull_inset_on_a_grid_by_hand() {
+    // A 5 x 5 unit grid, x 0..4, y -2..2, z 0, one scale of all 25 points: centroid
+    // (2, 0, 0), variances 2 and 2 (of 0..4), scale 2 / (2 sqrt 2) = 1 / sqrt 2. The hull
+    // is the square's outline: (1, 0) lies 1 inside its edge x = 0, so h = 1 / sqrt 2;
+    // the border point (0, 0) lies on it; the centre (2, 0) lies 2 inside every edge.
+    let grid: Vec<[f64; 3]> = (0..25)
+        .map(|i| [(i % 5) as f64, (i / 5) as f64 - 2.0, 0.0])
+        .collect();
+    let cfg = FeatureConfig {
+        scales: vec![25],
+        groups: FeatureGroups {
+            h: true,
+            s: true,
+            ..FeatureGroups::NONE
+        },
+        ..FeatureConfig::default()
+    };
+    assert_eq!(cfg.groups.names(), ["s_perp", "s_par", "h"]);
+    let f = extract(&PointCloud::from_f64(&grid).unwrap(), &cfg).unwrap();
+    let e = |i: usize| f.point(i)[2];
+    assert_eq!(
+        (grid[11], grid[10], grid[12]),
+        ([1.0, 0.0, 0.0], [0.0; 3], [2.0, 0.0, 0.0])
+    );
+    assert!((e(11) - 0.5f32.sqrt()).abs() < 1e-6, "{}", e(11));
+    assert_eq!(e(10), 0.0);
+    assert!((e(12) - 2.0 * 0.5f32.sqrt()).abs() < 1e-6, "{}", e(12));
+}
+
+#[test]
+fn hull_inset_is_invariant_and_small_on_borders() {
+    // A random half plane y >= 0: along the border h is small at every scale (the point
+    // is on or next to its neighbours' hull), inside it is a good part of the radius
+    // (about 1.1 for 16 random neighbours, near 2 for a full disc); moving, turning or
+    // scaling the cloud keeps it (within the f32 rounding the other invariance test
+    // allows).
+    let mut rng = Rng(17);
+    let pts: Vec<[f64; 3]> = (0..4000)
+        .map(|_| [rng.next() * 60.0, rng.next() * 60.0, 0.0])
+        .collect();
+    let cfg = FeatureConfig {
+        scales: vec![64, 16],
+        groups: FeatureGroups {
+            h: true,
+            ..FeatureGroups::NONE
+        },
+        ..FeatureConfig::default()
+    };
+    let run_h = |p: &[[f64; 3]]| extract(&PointCloud::from_f64(p).unwrap(), &cfg).unwrap();
+    let f = run_h(&pts);
+    let at = &pts;
+    let pick = |lo: f64, hi: f64| {
+        (0..at.len()).filter(move |&i| {
+            let p = at[i];
+            p[1] >= lo && p[1] < hi && p[0] > 10.0 && p[0] < 50.0
+        })
+    };
+    let median = |v: &mut Vec<f32>| {
+        v.sort_by(f32::total_cmp);
+        v[v.len() / 2]
+    };
+    for s in 0..2 {
+        let mut border: Vec<f32> = pick(0.0, 0.15).map(|i| f.point(i)[s]).collect();
+        let mut inside: Vec<f32> = pick(25.0, 35.0).map(|i| f.point(i)[s]).collect();
+        let (b, i) = (median(&mut border), median(&mut inside));
+        assert!(
+            b < 0.2 && i > 0.9 && i < 2.5,
+            "scale {s}: border {b}, inside {i}"
+        );
+    }
+    let (c, s) = (0.6f64.cos(), 0.6f64.sin());
+    let moved: Vec<_> = pts
+        .iter()
+        .map(|p| {
+            [
+                1e5 + 3.0 * (c * p[0] - s * p[2]),
+                3.0 * p[1] - 7.0,
+                3.0 * (s * p[0] + c * p[2]),
+            ]
+        })
+        .collect();
+    let d = differing_points(&f, &run_h(&moved), 1e-3);
+    assert!(d <= pts.len() / 100, "{d} points differ");
+}

@@ -399,7 +399,7 @@ fn trained_config(classifier: &Classifier) -> Result<FeatureConfig, NnError> {
 
 /// The feature groups whose value names are exactly `names`.
 fn groups_named(names: &[String]) -> Option<FeatureGroups> {
-    (0u8..64)
+    (0u8..128)
         .map(|bits| FeatureGroups {
             sigma: bits & 1 != 0,
             sigma_u: bits & 2 != 0,
@@ -407,6 +407,7 @@ fn groups_named(names: &[String]) -> Option<FeatureGroups> {
             d: bits & 8 != 0,
             s: bits & 16 != 0,
             c: bits & 32 != 0,
+            h: bits & 64 != 0,
         })
         .find(|g| (g.names().iter().copied()).eq(names.iter().map(String::as_str)))
 }

@@ -112,9 +112,10 @@ fn feature_groups(groups: Option<Vec<String>>) -> PyResult<FeatureGroups> {
             "d" => &mut selected.d,
             "s" => &mut selected.s,
             "c" => &mut selected.c,
+            "h" => &mut selected.h,
             other => {
                 return Err(PyValueError::new_err(format!(
-                    "unknown feature group '{other}' (the groups: sigma, sigma_u, sigma_l, d, s, c)"
+                    "unknown feature group '{other}' (the groups: sigma, sigma_u, sigma_l, d, s, c, h)"
                 )));
             }
         };

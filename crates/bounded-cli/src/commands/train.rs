@@ -21,6 +21,7 @@ pub fn groups(selected: &[FeatureGroupArg]) -> Result<FeatureGroups> {
         d: has(FeatureGroupArg::D),
         s: has(FeatureGroupArg::S),
         c: has(FeatureGroupArg::C),
+        h: has(FeatureGroupArg::H),
     };
     if groups.count() == 0 {
         bail!("--features selects no feature group");

@@ -23,7 +23,7 @@ CLASS_NAMES: Final[tuple[str, str, str]]
 
 _Path = Union[str, os.PathLike[str]]
 _Positions = npt.NDArray[Union[np.float32, np.float64]]
-_Group = Literal["sigma", "sigma_u", "sigma_l", "d", "s", "c"]
+_Group = Literal["sigma", "sigma_u", "sigma_l", "d", "s", "c", "h"]
 
 class Model:
     """A BoundED model: its networks (one or two stages), the scales and features it was
