@@ -62,6 +62,8 @@ pub(crate) struct Scratch {
     values: Vec<[f64; 3]>,
     /// Each lane's frames and sides.
     lanes: Vec<Lane>,
+    /// Each scale's `h` per lane before its normalisation (see [`hull_insets`]).
+    insets: Vec<Lanes>,
 }
 
 impl Scratch {
@@ -75,6 +77,7 @@ impl Scratch {
             matrices: Vec::new(),
             values: Vec::new(),
             lanes: (0..LANES).map(|_| Lane::default()).collect(),
+            insets: Vec::new(),
         }
     }
 }
@@ -372,12 +375,14 @@ fn hull_insets(arch: pulp::Arch, scratch: &mut Scratch, count: usize, scales: &[
             }
         }
     }
-    let mut insets = vec![[0.0; LANES]; scales.len()];
+    let insets = &mut scratch.insets;
+    insets.clear();
+    insets.resize(scales.len(), [0.0; LANES]);
     arch.dispatch(Reaches {
         xyz: &scratch.xyz[..scales.first().copied().unwrap_or(0)],
         axes,
         scales,
-        out: &mut insets,
+        out: insets,
     });
     for (l, lane) in lanes.iter_mut().enumerate() {
         lane.hulls.clear();
@@ -1053,13 +1058,8 @@ mod tests {
     fn reaches_side_by_side_are_the_simple_ones() {
         // Random points about the origin, other in every lane, other axes too; three
         // scales: the same bits as the plain loop over directions and points per lane.
-        let mut state = 3u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut uniform = bounded_geom::uniform_stream(3);
+        let mut next = move || uniform() * 2.0 - 1.0;
         for _ in 0..50 {
             let mut xyz = vec![[[0.0; LANES]; 3]; 40];
             for row in &mut xyz[1..] {
