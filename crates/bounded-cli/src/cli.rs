@@ -128,7 +128,9 @@ pub struct TrainArgs {
     /// set made on the fly (options after it: free-form label rules
     /// `:depth=1:angle=10:band=0.5:noise=3` and features three times the default size
     /// `:size=3`; on the mesh kinds sparse planes `:faces=3`, blocks
-    /// with 12-25 degree creases `:shallow=30`, sharp bands `:band=1.5`). Repeat to combine.
+    /// with 12-25 degree creases `:shallow=30`, sharp bands `:band=1.5`, a fifth of the
+    /// points kept farther than 2 spacings from a crease `:sparse=0.2:dense=2`). Repeat to
+    /// combine.
     #[arg(long, required = true)]
     pub data: Vec<String>,
     /// Output model file.
@@ -255,7 +257,7 @@ pub enum PositiveArg {
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
     /// Which kind of set: cad, random, boundary, mixed or freeform; options after it as for
-    /// `train --data` (`freeform:depth=1:angle=10:band=1.5:noise=3:size=3`, `cad:faces=3:shallow=30:band=1.5`).
+    /// `train --data` (`freeform:depth=1:angle=10:band=1.5:noise=3:size=3`, `cad:faces=3:shallow=30:band=1.5:sparse=0.2:dense=2`).
     #[arg(long, default_value = "mixed")]
     pub kind: String,
     /// Output directory (created).

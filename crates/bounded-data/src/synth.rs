@@ -12,7 +12,10 @@
 //! shapes fill their planar faces more sparsely than their crease rows, as SPEC.md describes
 //! the ABC clouds. With [`SetConfig::band`] (spec option `band=B`), every point within `B`
 //! spacings of a crease is sharp: the band convention of the free-form kind, for a model
-//! meant to call bands rather than one row.
+//! meant to call bands rather than one row. With [`SetConfig::thinning`] (spec options
+//! `sparse=F` and `dense=R`), the points farther than `R` spacings from every crease are
+//! thinned to the share `F`: a density step, as a CAD triangulation's vertices crowd along
+//! its creases.
 //!
 //! The free-form kind ([`SetKind::Freeform`], see [`generate_freeform`]) is built
 //! differently: smooth parametric bases (height fields, bent and twisted sheets, shells)
@@ -184,7 +187,53 @@ pub struct SetConfig {
     pub band: Option<f64>,
     /// The free-form kind's [`FreeformSpec::feature_size`] (1, the default, draws as before).
     pub feature_size: f64,
+    /// The mesh kinds' [`ShapeSpec::thinning`]: `None`, the default, thins nothing.
+    pub thinning: Option<Thinning>,
 }
+
+/// Points farther than `radius` spacings from every crease are kept with probability
+/// `keep`; the rest all stay. Drawn from a stream of the shape's seed of its own, so a
+/// thinned cloud (before noise) is a subset of the unthinned one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Thinning {
+    /// Half-width of the dense band around every crease, in units of the cloud's median
+    /// nearest-neighbour spacing before thinning (spec option `dense=`, 2 by default).
+    pub radius: f64,
+    /// The share of the other points kept (spec option `sparse=`, 0 to 1; 1 keeps all).
+    pub keep: f64,
+}
+
+impl Default for Thinning {
+    /// Dense within 2 spacings, nothing thinned: a set asks for `sparse=`.
+    fn default() -> Self {
+        Self {
+            radius: 2.0,
+            keep: 1.0,
+        }
+    }
+}
+
+impl Thinning {
+    /// The radius must lie in `0..=MAX_DENSE_RADIUS`, the share kept in `(0, 1]`.
+    fn validate(&self) -> Result<(), DataError> {
+        check_within(self.radius, 0.0..=MAX_DENSE_RADIUS, || {
+            format!(
+                "dense band {}: a multiple of the point spacing, 0 to {MAX_DENSE_RADIUS}",
+                self.radius
+            )
+        })?;
+        check_within(self.keep, f64::MIN_POSITIVE..=1.0, || {
+            format!(
+                "sparse share {}: the share of points kept, above 0 and at most 1",
+                self.keep
+            )
+        })
+    }
+}
+
+/// The widest [`Thinning::radius`]: a band that wide covers most of a cloud of the default
+/// size, so nothing is left to thin.
+pub const MAX_DENSE_RADIUS: f64 = 16.0;
 
 /// The largest [`SetConfig::shallow`]: a set of nothing but shallow ridges teaches nothing
 /// of the other creases.
@@ -217,6 +266,7 @@ impl SetConfig {
             shallow: 0.0,
             band: None,
             feature_size: 1.0,
+            thinning: None,
         }
     }
 
@@ -237,6 +287,7 @@ impl SetConfig {
         check_face_spacing(self.face_spacing)?;
         check_feature_size(self.feature_size)?;
         self.band.map_or(Ok(()), check_band)?;
+        self.thinning.as_ref().map_or(Ok(()), Thinning::validate)?;
         check_within(self.shallow, 0.0..=MAX_SHALLOW, || {
             format!(
                 "shallow ridges' weight {}: 0 to {MAX_SHALLOW} (the other shapes' sum to about 30)",
@@ -343,6 +394,7 @@ impl SetConfig {
             seed,
             face_spacing,
             band: self.band,
+            thinning: self.thinning,
         }
     }
 
@@ -392,6 +444,8 @@ pub struct ShapeSpec {
     /// a model can be trained for bands on every kind. `None` keeps one row (see
     /// [`Sampling`]), which is about `band` 0.66 in random mode.
     pub band: Option<f64>,
+    /// Sparse away from the creases (see [`Thinning`]); `None` thins nothing.
+    pub thinning: Option<Thinning>,
 }
 
 /// Generates a whole set in parallel, in index order.
@@ -432,6 +486,7 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     check_noise(spec.noise)?;
     check_face_spacing(spec.face_spacing)?;
     spec.band.map_or(Ok(()), check_band)?;
+    spec.thinning.as_ref().map_or(Ok(()), Thinning::validate)?;
     check_outlier_fraction(spec.outlier_fraction)?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut mesh = spec.kind.build(&mut rng);
@@ -450,6 +505,18 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     let spacing = perturb::median_spacing(&sampled.points, sampled.spacing_hint);
     if let Some(band) = spec.band {
         sample::widen_sharp(&mut sampled, &features.sharp, band * spacing);
+    }
+    if let Some(thinning) = spec.thinning.filter(|t| t.keep < 1.0) {
+        let mut own = ChaCha8Rng::seed_from_u64(spec.seed);
+        own.set_stream(1);
+        let radius = thinning.radius * spacing;
+        sample::thin_away_from(
+            &mut sampled,
+            &features.sharp,
+            radius,
+            thinning.keep,
+            &mut own,
+        );
     }
     let sigma = spec.noise * spacing;
     match spec.noise_direction {
@@ -600,15 +667,17 @@ impl SetConfig {
     /// `min_depth`, `min_angle`, `band` and `min_depth_per_noise`) and `size=`
     /// ([`feature_size`](Self::feature_size)); for the mesh kinds
     /// `faces=` ([`face_spacing`](Self::face_spacing)), `shallow=`
-    /// ([`shallow`](Self::shallow)) and `band=` ([`band`](Self::band)). An option of the
-    /// other kinds is refused.
+    /// ([`shallow`](Self::shallow)), `band=` ([`band`](Self::band)), `sparse=` and `dense=`
+    /// ([`thinning`](Self::thinning)'s share kept and radius). An option of the other kinds
+    /// is refused.
     pub fn with_options(mut self, options: &[&str]) -> Result<SetConfig, DataError> {
         let bad = |what: String| DataError::Generator { what };
         let freeform = self.kind == SetKind::Freeform;
         for option in options {
             let not_an_option = || {
                 bad(format!(
-                    "{option:?} is not depth=, angle=, band=, noise=, size=, faces= or shallow= a number"
+                    "{option:?} is not depth=, angle=, band=, noise=, size=, faces=, shallow=, \
+                     sparse= or dense= a number"
                 ))
             };
             let (name, value) = option.split_once('=').ok_or_else(not_an_option)?;
@@ -623,6 +692,8 @@ impl SetConfig {
                 "size" => (&mut self.feature_size, true),
                 "faces" => (&mut self.face_spacing, false),
                 "shallow" => (&mut self.shallow, false),
+                "sparse" => (&mut self.thinning.get_or_insert_default().keep, false),
+                "dense" => (&mut self.thinning.get_or_insert_default().radius, false),
                 _ => return Err(not_an_option()),
             };
             if for_freeform != freeform {
@@ -729,6 +800,7 @@ mod tests {
             seed: 0,
             face_spacing: 1.0,
             band: None,
+            thinning: None,
         };
         for spec in every_shape(template) {
             let (kind, sampling) = (spec.kind, spec.sampling);
@@ -767,6 +839,7 @@ mod tests {
             seed: 0,
             face_spacing: 1.0,
             band: None,
+            thinning: None,
         };
         for spec in every_shape(template) {
             let noisy = generate_shape(&spec).unwrap();
@@ -799,6 +872,7 @@ mod tests {
                 seed: 11,
                 face_spacing: 1.0,
                 band: None,
+                thinning: None,
             };
             let clean = generate_shape(&ShapeSpec {
                 noise: 0.0,
@@ -840,6 +914,7 @@ mod tests {
             seed: 1,
             face_spacing: 1.0,
             band: None,
+            thinning: None,
         };
         assert!(generate_shape(&spec).is_ok());
         for noise in [-0.1, f64::NAN, f64::INFINITY] {
@@ -944,6 +1019,67 @@ mod tests {
     }
 
     #[test]
+    fn thinned_sets_keep_their_shapes_every_sharp_point_and_a_share_of_the_rest() {
+        let mut plain = small(SetKind::Cad, 8, 6);
+        plain.noise_levels = vec![0.0];
+        plain.outlier_fraction = 0.0;
+        let thin = plain.clone().with_options(&["sparse=0.2", "dense=3"]);
+        let thin = thin.unwrap();
+        let want = Thinning {
+            radius: 3.0,
+            keep: 0.2,
+        };
+        assert_eq!(thin.thinning, Some(want));
+        let (mut kept, mut all) = (0, 0);
+        for i in 0..plain.shapes {
+            let (CloudSpec::Mesh(a), CloudSpec::Mesh(b)) = (plain.spec(i), thin.spec(i)) else {
+                panic!("a mesh kind gives mesh shapes");
+            };
+            assert_eq!(b.thinning, Some(want));
+            assert_eq!(
+                ShapeSpec {
+                    thinning: None,
+                    ..b.clone()
+                },
+                a
+            );
+            let (full, thinned) = (generate_shape(&a).unwrap(), generate_shape(&b).unwrap());
+            assert_eq!(generate_shape(&b).unwrap(), thinned);
+            // The thinned cloud is the full one's subset, in order, every sharp point kept.
+            let point = |c: &LabelledCloud, j| (c.cloud.position_f64(j), c.labels[j]);
+            let mut rest = (0..full.cloud.len()).map(|j| point(&full, j));
+            for j in 0..thinned.cloud.len() {
+                let p = point(&thinned, j);
+                assert!(
+                    rest.any(|q| q == p),
+                    "shape {i}: point {j} is not the full cloud's"
+                );
+            }
+            let sharp = |c: &LabelledCloud| c.class_counts()[Class::Sharp as usize];
+            assert_eq!(sharp(&thinned), sharp(&full), "shape {i}");
+            (kept, all) = (kept + thinned.cloud.len(), all + full.cloud.len());
+        }
+        // These small clouds (1,000-1,500 points) lie half or more within 3 spacings of a
+        // crease; a fifth of the rest stays.
+        assert!(kept * 10 < all * 9 && kept * 5 > all, "{kept} of {all}");
+        // A dense band alone thins nothing: the same clouds as without it.
+        let band_only = plain.clone().with_options(&["dense=3"]).unwrap();
+        assert_eq!(generate(&band_only).unwrap(), generate(&plain).unwrap());
+        for bad in [
+            "sparse=0",
+            "sparse=1.5",
+            "dense=-1",
+            "dense=100",
+            "sparse=nan",
+        ] {
+            let set = SetConfig::new(SetKind::Cad, 1, 2).with_options(&[bad]);
+            assert!(matches!(set, Err(DataError::Generator { .. })), "{bad}");
+        }
+        let freeform = SetConfig::new(SetKind::Freeform, 1, 2).with_options(&["sparse=0.5"]);
+        assert!(freeform.is_err());
+    }
+
+    #[test]
     fn sparse_faces_keep_the_shapes_and_raise_the_share_of_crease_rows() {
         let plain = small(SetKind::Cad, 8, 12);
         let sparse = SetConfig {
@@ -962,6 +1098,7 @@ mod tests {
                 ShapeSpec {
                     face_spacing: 1.0,
                     band: None,
+                    thinning: None,
                     ..b.clone()
                 },
                 a

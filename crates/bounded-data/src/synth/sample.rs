@@ -327,6 +327,28 @@ pub(crate) fn widen_sharp(sampled: &mut Sampled, creases: &[Polyline], radius: f
     }
 }
 
+/// Thins the points farther than `radius` from every crease, keeping each with probability
+/// `keep`; every point within `radius` stays, and labels go with their points. This makes the
+/// density step of a CAD triangulation whose vertices crowd along its creases and leave its
+/// faces sparse: where the two meet, a point's nearest neighbours lie on the dense side.
+pub(crate) fn thin_away_from(
+    sampled: &mut Sampled,
+    creases: &[Polyline],
+    radius: f64,
+    keep: f64,
+    rng: &mut impl Rng,
+) {
+    let box_ = bounds(sampled.points.iter().copied());
+    let near = SegmentIndex::new(creases, radius, box_);
+    let kept: Vec<bool> = (sampled.points.iter())
+        .map(|&p| near.within(p, radius) || rng.random::<f64>() < keep)
+        .collect();
+    let mut flags = kept.iter();
+    sampled.points.retain(|_| *flags.next().unwrap_or(&true));
+    let mut flags = kept.iter();
+    sampled.labels.retain(|_| *flags.next().unwrap_or(&true));
+}
+
 fn spacing_max(surface: &Surface, density: &Density, target: usize) -> f64 {
     (surface.weighted_area / (target as f64 * (1.0 - density.gradient))).sqrt()
 }
@@ -509,6 +531,67 @@ mod tests {
             // Strips 0.04 wide either side of 12 unit edges cover 0.96 of the area 6: about
             // 960 of 6000 points, of which the one-row labels held 240 (random) to 360 (rows).
             assert!(widened > 400, "{sampling:?}: {widened}");
+        }
+    }
+
+    #[test]
+    fn thinning_keeps_every_point_near_a_crease_and_a_share_of_the_rest() {
+        let cube = unit_cube();
+        let f = cube.features();
+        for (sampling, seed) in [(Sampling::MeshVertex, 7), (Sampling::Random, 8)] {
+            let full = sample(
+                &cube,
+                &f,
+                sampling,
+                8000,
+                1.0,
+                &mut ChaCha8Rng::seed_from_u64(seed),
+            );
+            let mut thin = sample(
+                &cube,
+                &f,
+                sampling,
+                8000,
+                1.0,
+                &mut ChaCha8Rng::seed_from_u64(seed),
+            );
+            thin_away_from(
+                &mut thin,
+                &f.sharp,
+                0.1,
+                0.25,
+                &mut ChaCha8Rng::seed_from_u64(9),
+            );
+            // The thinned points are the full cloud's, in order, with their labels; every one
+            // within 0.1 of an edge is kept.
+            let mut rest = full.points.iter().zip(&full.labels);
+            let (mut near, mut far, mut far_kept) = (0, 0, 0);
+            for (p, c) in thin.points.iter().zip(&thin.labels) {
+                while let Some((q, d)) = rest.next() {
+                    let close = cube_edge_distance(*q) < 0.1;
+                    if q == p {
+                        assert_eq!(d, c);
+                        near += usize::from(close);
+                        far_kept += usize::from(!close);
+                        far += usize::from(!close);
+                        break;
+                    }
+                    assert!(!close, "{sampling:?}: {q:?} near an edge was dropped");
+                    far += 1;
+                }
+            }
+            far += rest.filter(|(q, _)| cube_edge_distance(**q) >= 0.1).count();
+            // Within 0.1 of its border lies 1 - 0.8^2 = 0.36 of each face: about 36% of the
+            // points (the density varies across the cube, the rows add some); a quarter of the
+            // others stays (binomial, 5 sigma).
+            let share = near as f64 / full.points.len() as f64;
+            assert!((0.28..0.48).contains(&share), "{sampling:?}: {share}");
+            let sigma = (far as f64 * 0.25 * 0.75).sqrt();
+            assert!(
+                (far_kept as f64 - 0.25 * far as f64).abs() < 5.0 * sigma,
+                "{sampling:?}: {far_kept} of {far}"
+            );
+            assert_eq!(thin.labels.len(), thin.points.len());
         }
     }
 

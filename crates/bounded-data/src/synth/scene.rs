@@ -34,6 +34,7 @@ pub fn demo_scene(seed: u64) -> Result<LabelledCloud, DataError> {
             seed: seed.wrapping_mul(31).wrapping_add(i as u64),
             face_spacing: 1.0,
             band: None,
+            thinning: None,
         };
         let shape = generate_shape(&spec)?;
         let cloud = &shape.cloud;
