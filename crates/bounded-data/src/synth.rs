@@ -192,8 +192,8 @@ pub struct SetConfig {
 }
 
 /// Points farther than `radius` spacings from every crease are kept with probability
-/// `keep`; the rest all stay. Drawn from a stream of the shape's seed of its own, so a
-/// thinned cloud (before noise) is a subset of the unthinned one.
+/// `keep`; the rest all stay. The draws come from a stream of the shape's seed that nothing
+/// else draws from, so a thinned cloud (before noise) is a subset of the unthinned one.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Thinning {
     /// Half-width of the dense band around every crease, in units of the cloud's median
@@ -480,8 +480,8 @@ pub fn generate_one(
 
 /// Generates one labelled cloud.
 ///
-/// Fails when `spec.points` is 0 (an empty cloud) or its noise, face spacing or outlier
-/// fraction is out of range (see [`SetConfig::validate`]).
+/// Fails when `spec.points` is 0 (an empty cloud) or its noise, face spacing, band,
+/// thinning or outlier fraction is out of range (see [`SetConfig::validate`]).
 pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     check_noise(spec.noise)?;
     check_face_spacing(spec.face_spacing)?;

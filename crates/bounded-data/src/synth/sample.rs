@@ -567,7 +567,7 @@ mod tests {
             let mut rest = full.points.iter().zip(&full.labels);
             let (mut near, mut far, mut far_kept) = (0, 0, 0);
             for (p, c) in thin.points.iter().zip(&thin.labels) {
-                while let Some((q, d)) = rest.next() {
+                for (q, d) in rest.by_ref() {
                     let close = cube_edge_distance(*q) < 0.1;
                     if q == p {
                         assert_eq!(d, c);
