@@ -39,6 +39,7 @@ pub fn box_cloud(points: usize, seed: u64) -> LabelledCloud {
         seed,
         face_spacing: 1.0,
         band: None,
+        thinning: None,
     })
     .expect("generated")
 }
