@@ -539,22 +539,11 @@ mod tests {
         let cube = unit_cube();
         let f = cube.features();
         for (sampling, seed) in [(Sampling::MeshVertex, 7), (Sampling::Random, 8)] {
-            let full = sample(
-                &cube,
-                &f,
-                sampling,
-                8000,
-                1.0,
-                &mut ChaCha8Rng::seed_from_u64(seed),
-            );
-            let mut thin = sample(
-                &cube,
-                &f,
-                sampling,
-                8000,
-                1.0,
-                &mut ChaCha8Rng::seed_from_u64(seed),
-            );
+            let draw = || {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                sample(&cube, &f, sampling, 8000, 1.0, &mut rng)
+            };
+            let (full, mut thin) = (draw(), draw());
             thin_away_from(
                 &mut thin,
                 &f.sharp,
