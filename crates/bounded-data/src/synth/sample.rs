@@ -318,13 +318,26 @@ fn random(
 /// Widens the sharp labels to a band: every point within `radius` of a crease becomes sharp
 /// (sharp wins over boundary, as on the rows); points already sharp stay so.
 pub(crate) fn widen_sharp(sampled: &mut Sampled, creases: &[Polyline], radius: f64) {
-    let box_ = bounds(sampled.points.iter().copied());
-    let sharp = SegmentIndex::new(creases, radius, box_);
-    for (p, class) in sampled.points.iter().zip(&mut sampled.labels) {
-        if sharp.within(*p, radius) {
+    let near = near_creases(&sampled.points, creases, radius);
+    for (near, class) in near.into_iter().zip(&mut sampled.labels) {
+        if near {
             *class = Class::Sharp;
         }
     }
+}
+
+/// Whether each of `points` lies within `radius` of a crease.
+fn near_creases(points: &[V3], creases: &[Polyline], radius: f64) -> Vec<bool> {
+    let index = SegmentIndex::new(creases, radius, bounds(points.iter().copied()));
+    points.iter().map(|&p| index.within(p, radius)).collect()
+}
+
+/// Keeps the entries of `a` and `b` (as long as `keep`) whose flag in `keep` is set.
+pub(crate) fn retain_flagged<A, B>(keep: &[bool], a: &mut Vec<A>, b: &mut Vec<B>) {
+    let mut flags = keep.iter();
+    a.retain(|_| *flags.next().unwrap_or(&true));
+    let mut flags = keep.iter();
+    b.retain(|_| *flags.next().unwrap_or(&true));
 }
 
 /// Thins the points farther than `radius` from every crease, keeping each with probability
@@ -338,15 +351,10 @@ pub(crate) fn thin_away_from(
     keep: f64,
     rng: &mut impl Rng,
 ) {
-    let box_ = bounds(sampled.points.iter().copied());
-    let near = SegmentIndex::new(creases, radius, box_);
-    let kept: Vec<bool> = (sampled.points.iter())
-        .map(|&p| near.within(p, radius) || rng.random::<f64>() < keep)
+    let kept: Vec<bool> = (near_creases(&sampled.points, creases, radius).into_iter())
+        .map(|near| near || rng.random::<f64>() < keep)
         .collect();
-    let mut flags = kept.iter();
-    sampled.points.retain(|_| *flags.next().unwrap_or(&true));
-    let mut flags = kept.iter();
-    sampled.labels.retain(|_| *flags.next().unwrap_or(&true));
+    retain_flagged(&kept, &mut sampled.points, &mut sampled.labels);
 }
 
 fn spacing_max(surface: &Surface, density: &Density, target: usize) -> f64 {

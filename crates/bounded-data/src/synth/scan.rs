@@ -12,7 +12,7 @@ use super::freeform::Base;
 use super::grid::Grid;
 use super::profile::P2;
 use super::relief::Relief;
-use super::sample::FILL_LEVELS;
+use super::sample::{FILL_LEVELS, retain_flagged};
 use bounded_geom::vec3::{V3, norm, sub};
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -304,10 +304,7 @@ pub(crate) fn punch_holes(
         let centre = points[rng.random_range(0..points.len())];
         let r = rng.random_range(radii.clone());
         let keep: Vec<bool> = points.iter().map(|&p| norm(sub(p, centre)) >= r).collect();
-        let mut k = keep.iter().copied();
-        points.retain(|_| k.next().unwrap_or(true));
-        let mut k = keep.iter().copied();
-        uvs.retain(|_| k.next().unwrap_or(true));
+        retain_flagged(&keep, points, uvs);
     }
 }
 
