@@ -240,10 +240,7 @@ impl Column {
 
     /// Keeps the values `i` with `keep[i]` true, in order (`keep` has one flag per value).
     pub(crate) fn retain(&mut self, keep: &[bool]) {
-        with_values!(self, v => {
-            let mut flags = keep.iter();
-            v.retain(|_| flags.next().copied().unwrap_or(false));
-        })
+        with_values!(self, v => retain_flagged(v, keep))
     }
 
     /// Value `i` as `f64` (exact for every type). Panics when `i` is out of range, like
@@ -611,6 +608,13 @@ impl TableView<'_> {
             _ => p,
         }
     }
+}
+
+/// Keeps the entries `i` of `values` with `keep[i]` true, in order (`keep` has one flag per
+/// entry): the one way columns, points and their labels are thinned together.
+pub(crate) fn retain_flagged<T>(values: &mut Vec<T>, keep: &[bool]) {
+    let mut flags = keep.iter();
+    values.retain(|_| flags.next().copied().unwrap_or(false));
 }
 
 /// Where the coordinate property `axis` (`"x"`, `"y"` or `"z"`, in any case) is among

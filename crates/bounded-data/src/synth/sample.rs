@@ -17,6 +17,7 @@
 use super::grid::{Grid, bounds};
 use super::mesh::{Features, Mesh, Polyline};
 use super::segments::SegmentIndex;
+use crate::table::retain_flagged;
 use bounded_geom::Class;
 use bounded_geom::vec3::{V3, add, dot, lerp, norm, normalize, scale, sub};
 use rand::Rng;
@@ -332,14 +333,6 @@ fn near_creases(points: &[V3], creases: &[Polyline], radius: f64) -> Vec<bool> {
     points.iter().map(|&p| index.within(p, radius)).collect()
 }
 
-/// Keeps the entries of `a` and `b` (as long as `keep`) whose flag in `keep` is set.
-pub(crate) fn retain_flagged<A, B>(keep: &[bool], a: &mut Vec<A>, b: &mut Vec<B>) {
-    let mut flags = keep.iter();
-    a.retain(|_| *flags.next().unwrap_or(&true));
-    let mut flags = keep.iter();
-    b.retain(|_| *flags.next().unwrap_or(&true));
-}
-
 /// Thins the points farther than `radius` from every crease, keeping each with probability
 /// `keep`; every point within `radius` stays, and labels go with their points. This makes the
 /// density step of a CAD triangulation whose vertices crowd along its creases and leave its
@@ -354,7 +347,8 @@ pub(crate) fn thin_away_from(
     let kept: Vec<bool> = (near_creases(&sampled.points, creases, radius).into_iter())
         .map(|near| near || rng.random::<f64>() < keep)
         .collect();
-    retain_flagged(&kept, &mut sampled.points, &mut sampled.labels);
+    retain_flagged(&mut sampled.points, &kept);
+    retain_flagged(&mut sampled.labels, &kept);
 }
 
 fn spacing_max(surface: &Surface, density: &Density, target: usize) -> f64 {

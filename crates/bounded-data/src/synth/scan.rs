@@ -12,7 +12,8 @@ use super::freeform::Base;
 use super::grid::Grid;
 use super::profile::P2;
 use super::relief::Relief;
-use super::sample::{FILL_LEVELS, retain_flagged};
+use super::sample::FILL_LEVELS;
+use crate::table::retain_flagged;
 use bounded_geom::vec3::{V3, norm, sub};
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -304,7 +305,8 @@ pub(crate) fn punch_holes(
         let centre = points[rng.random_range(0..points.len())];
         let r = rng.random_range(radii.clone());
         let keep: Vec<bool> = points.iter().map(|&p| norm(sub(p, centre)) >= r).collect();
-        retain_flagged(&keep, points, uvs);
+        retain_flagged(points, &keep);
+        retain_flagged(uvs, &keep);
     }
 }
 
