@@ -95,15 +95,21 @@ mod tests {
             let classifier = which.classifier().unwrap();
             let file = classifier.file();
             assert_eq!(file.scales, SCALES, "{which}");
-            assert_eq!(file.feature_names.len(), 12);
-            // SPEC.md's fusion tree over 16 scales (15 fusion layers) and its classifier.
-            assert_eq!(file.model.n_params(), 6179);
+            // The default model adds the hull inset `h` to SPEC.md's 12 features per scale.
+            let (features, first, second) = match which {
+                EmbeddedModel::Row => (13, 6371, 7715),
+                EmbeddedModel::Band => (12, 6179, 7523),
+            };
+            assert_eq!(file.feature_names.len(), features, "{which}");
+            // SPEC.md's fusion tree over 16 scales (15 fusion layers) and its classifier: the
+            // first fusion layers read two scales' features (8 pairs of 2 x features x 12).
+            assert_eq!(file.model.n_params(), first, "{which}");
             assert_eq!(file.class_names, CLASS_NAMES);
-            let second = classifier
+            let context = classifier
                 .second_stage()
                 .expect("an auto-context second stage");
-            assert_eq!(second.file().feature_names.len(), 12 + 7);
-            assert_eq!(second.file().model.n_params(), 7523);
+            assert_eq!(context.file().feature_names.len(), features + 7);
+            assert_eq!(context.file().model.n_params(), second, "{which}");
         }
     }
 

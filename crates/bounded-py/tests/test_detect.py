@@ -238,7 +238,8 @@ def test_models_embedded_loaded_or_by_path(box):
     scales = [128, 108, 91, 76, 64, 54, 45, 38, 32, 27, 23, 19, 16, 13, 11, 10]
     assert embedded.scales == scales
     assert embedded.stages == 2
-    assert embedded.feature_names == bounded.feature_names()
+    # The default model adds the hull inset to the 12 features of BoundED's groups.
+    assert embedded.feature_names == bounded.feature_names(["sigma_u", "sigma_l", "d", "s", "c", "h"])
     assert repr(embedded) == f"Model(embedded row, scales={scales}, stages=2)"
     reference = bounded.detect(box)
     loaded = bounded.Model.load(DEFAULT_MODEL)

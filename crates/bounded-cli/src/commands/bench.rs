@@ -56,7 +56,11 @@ struct EvalSet {
 pub fn run(args: &BenchArgs) -> Result<()> {
     let start = Instant::now();
     // SPEC.md: 8000 iterations for ABC-size training sets (ours holds 5.8M points).
-    let (iterations, runs) = if args.quick { (1000, 1) } else { (8000, 5) };
+    let (iterations, runs) = if args.quick {
+        (1000, 1)
+    } else {
+        (8000, recipe::RUNS)
+    };
     let schedule = Schedule {
         iterations,
         runs,
@@ -66,16 +70,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         runs: 1,
         ..schedule
     };
-    // At 16 scales (2026-12-05): quick mode took 9.4 minutes, full mode 94.8 (10.1 GiB peak),
-    // 55 of them training the main model two runs at a time; on a slower day (2026-12-06)
-    // full mode took 110.2 (docs/performance.md).
+    // At 16 scales with 13 features and two runs per stage (2026-12-07): full mode took 86.1
+    // minutes (13.5 GiB peak, in the single-stage ablations), 32 of them training the main
+    // model; the ablations, one run at a time, take most of the rest (docs/performance.md).
     let (mode, duration) = if args.quick {
         ("quick", "about 10 minutes")
     } else {
-        ("full", "1.5 to 2 hours")
+        ("full", "1.5 hours")
     };
     eprintln!(
-        "bench: {mode} mode, expected duration {duration} on 2 cores (full mode peaks near 11 GB of memory)"
+        "bench: {mode} mode, expected duration {duration} on 2 cores (full mode peaks near 14.5 GB of memory)"
     );
     let pcednet = args.data.join("pcednet");
     let peers_path = pcednet.join("peers.csv");
