@@ -349,8 +349,8 @@ fn frames<'a>(
 /// wherever they lie.
 ///
 /// One plane for every scale, so that one running maximum per direction serves all
-/// scales: 16 multiply-adds per neighbour of the largest scale, side by side over the
-/// lanes, where an exact hull per scale sorts each scale's points again (six times the
+/// scales: 14 products, 14 sums and 32 extremes per neighbour of the largest scale, side by
+/// side over the lanes, where an exact hull per scale sorts each scale's points again (six times the
 /// features' time at 16 scales) and a hull grown over the scales more than doubles it. The
 /// directions start at the point's offset from the centroid, so the value turns with
 /// the cloud.
@@ -459,15 +459,32 @@ impl pulp::WithSimd for Reaches<'_> {
                     simd.add_f64s(xy, simd.mul_f64s(c(&xyz[2]), c(&t[2])))
                 };
                 let (u, v) = (along(&axes[0]), along(&axes[1]));
-                for (i, d) in DIRECTIONS.iter().enumerate() {
-                    let w = simd.add_f64s(
-                        simd.mul_f64s(simd.splat_f64s(d[0]), u),
-                        simd.mul_f64s(simd.splat_f64s(d[1]), v),
-                    );
+                // `max_f64s(w, m)` is `w > m ? w : m` (vmaxpd), as a comparison and a
+                // select would be, which the compiler made a masked store whose reload
+                // stalled (12% of a detection). The origin's reach of 0 starts both.
+                let mut reach = |i: usize, w| {
                     let m = &mut S::as_mut_simd_f64s(&mut most[i]).0[r];
-                    *m = simd.select_f64s(simd.greater_than_f64s(w, *m), w, *m);
+                    *m = simd.max_f64s(w, *m);
                     let m = &mut S::as_mut_simd_f64s(&mut least[i]).0[r];
-                    *m = simd.select_f64s(simd.less_than_f64s(w, *m), w, *m);
+                    *m = simd.min_f64s(w, *m);
+                };
+                // Directions 0 and 8 are the axes (1 u + 0 v is u, up to a zero's sign,
+                // which a reach starting at 0 ignores). The others come in fours, i, 8 - i,
+                // 8 + i and 16 - i, from four products: (-a) + b, as the table's negative
+                // cosine gives it, is b - a bit for bit.
+                reach(0, u);
+                reach(8, v);
+                for i in [1, 2, 3, 4] {
+                    let [cos, sin] = DIRECTIONS[i];
+                    let (cos, sin) = (simd.splat_f64s(cos), simd.splat_f64s(sin));
+                    let (a, b) = (simd.mul_f64s(cos, u), simd.mul_f64s(sin, v));
+                    reach(i, simd.add_f64s(a, b));
+                    reach(16 - i, simd.sub_f64s(b, a));
+                    if i < 4 {
+                        let (c, d) = (simd.mul_f64s(sin, u), simd.mul_f64s(cos, v));
+                        reach(8 - i, simd.add_f64s(c, d));
+                        reach(8 + i, simd.sub_f64s(d, c));
+                    }
                 }
             }
             while let Some((_, out)) = at.next_if(|(k, _)| **k == j + 1) {
