@@ -349,11 +349,11 @@ fn frames<'a>(
 /// wherever they lie.
 ///
 /// One plane for every scale, so that one running maximum per direction serves all
-/// scales: 14 products, 14 sums and 32 extremes per neighbour of the largest scale, side by
-/// side over the lanes, where an exact hull per scale sorts each scale's points again (six times the
-/// features' time at 16 scales) and a hull grown over the scales more than doubles it. The
-/// directions start at the point's offset from the centroid, so the value turns with
-/// the cloud.
+/// scales: 14 products, 14 sums and 32 extremes per neighbour of the largest scale, side
+/// by side over the lanes, where an exact hull per scale sorts each scale's points again
+/// (six times the features' time at 16 scales) and a hull grown over the scales more than
+/// doubles it. The directions start at the point's offset from the centroid, so the value
+/// turns with the cloud.
 fn hull_insets(arch: pulp::Arch, scratch: &mut Scratch, count: usize, scales: &[usize]) {
     let lanes = &mut scratch.lanes[..count];
     let mut axes = [[[0.0; LANES]; 3]; 2];

@@ -1,8 +1,6 @@
 //! The `m`-th smallest of a set of keys: the threshold of the features' half
 //! neighbourhoods.
 
-use std::cmp::Ordering;
-
 /// The `m`-th smallest of a set of distinct `u64` keys: the threshold at or below which
 /// the `m` smallest lie.
 ///
@@ -72,9 +70,8 @@ impl SmallestFirst {
     }
 }
 
-/// The `m`-th smallest of `keys` (not empty, distinct, `m > 0`; the largest when `m`
-/// exceeds them), selected by [`partition`]s between `keys` and `spare`, which it
-/// overwrites.
+/// The `m`-th smallest of `keys` (not empty, `m > 0`; the largest when `m` exceeds
+/// them), selected by [`partition`]s between `keys` and `spare`, which it overwrites.
 ///
 /// The pivot is the key at position `m`, which is nearly right for the features' half
 /// neighbourhoods: the neighbours come sorted by distance to the query point, which lies
@@ -98,20 +95,21 @@ fn nth_of_copy(keys: &mut [u64], spare: &mut [u64], m: usize) -> u64 {
             m.min(n - 1)
         }];
         let (below, above) = partition(s, p, &mut to[..n]);
-        match (below + 1).cmp(&m) {
-            Ordering::Equal => return p,
-            Ordering::Greater => range = 0..below,
-            Ordering::Less => {
-                (m, range, reversed) = (m - below - 1, n - above..n, !reversed);
-            }
+        // `p` and any key equal to it rank from below + 1 to n - above.
+        if m <= below {
+            range = 0..below;
+        } else if m > n - above {
+            (m, range, reversed) = (m - (n - above), n - above..n, !reversed);
+        } else {
+            return p;
         }
         std::mem::swap(&mut from, &mut to);
     }
 }
 
 /// Writes the keys of `s` below `p` to the front of `out` in their order and those above
-/// it to the back in reverse order, returning how many of each (`p` itself, one of `s`,
-/// is in neither).
+/// it to the back in reverse order, returning how many of each (keys equal to `p`, one
+/// of `s`, are in neither).
 ///
 /// Every key is written to both ends, and only the matching end's count moves on: no
 /// branch on the unpredictable side a key falls on, and, unlike a swap in place, no load
@@ -122,7 +120,8 @@ fn partition(s: &[u64], p: u64, out: &mut [u64]) -> (usize, usize) {
     let n = out.len();
     let (mut below, mut above) = (0, 0);
     for &v in s {
-        // below + above <= the keys seen before v, at most n - 1: the slots differ.
+        // below + above counts the keys before v not equal to p, fewer than n - 1 but
+        // when v is the last key and the only p: the two slots differ or count nowhere.
         out[below] = v;
         out[n - 1 - above] = v;
         below += usize::from(v < p);
@@ -137,13 +136,15 @@ mod tests {
 
     #[test]
     fn nth_of_copy_matches_a_sort() {
-        // Random, ascending, descending and organ-pipe orders; every rank.
+        // Random, ascending, descending and organ-pipe orders, and five values repeated;
+        // every rank.
         let mut random = crate::test_stream(7);
         let random: Vec<u64> = (0..130).map(|i| (random() >> 20) << 8 | i).collect();
         let ascending: Vec<u64> = (0..100).collect();
         let descending: Vec<u64> = (0..100).rev().collect();
         let pipe: Vec<u64> = (0..50).chain((50..100).rev()).collect();
-        for keys in [random, ascending, descending, pipe] {
+        let repeated: Vec<u64> = (0..90).map(|i| i * 7 % 5).collect();
+        for keys in [random, ascending, descending, pipe, repeated] {
             let mut want = keys.clone();
             want.sort_unstable();
             let mut spare = vec![0; keys.len()];
