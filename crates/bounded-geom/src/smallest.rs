@@ -61,10 +61,10 @@ impl SmallestFirst {
         {
             return network.half_max_lanes(keys);
         }
+        self.spare.resize(keys.len(), 0);
         std::array::from_fn(|l| {
             self.copy.clear();
             self.copy.extend(keys.iter().map(|k| k[l]));
-            self.spare.resize(keys.len(), 0);
             nth_of_copy(&mut self.copy, &mut self.spare, m)
         })
     }
