@@ -171,7 +171,8 @@ pub struct TrainArgs {
     pub context_line: bool,
     /// Validation clouds, given as `--data` is and never trained on, on which the default
     /// decision is chosen and recorded in the model (the sensitivity of the highest median
-    /// MCC, or the most probable class). Repeat to combine; without it, the most probable class.
+    /// MCC if it beats the most probable class by more than 0.01, else the most probable
+    /// class). Repeat to combine; without it, the most probable class.
     #[arg(long)]
     pub calibrate_on: Vec<String>,
     /// The noise of the generated sets among `--data` and `--calibrate-on`.

@@ -28,6 +28,12 @@ pub const DECISIONS: [Option<f32>; 10] = [
     Some(0.9),
 ];
 
+/// How much more median MCC than the most probable class a sensitivity needs on the validation
+/// clouds to become a model's default. On 30 clouds a few thousandths are chance: a model that
+/// took sensitivity 0.6 for 0.0025 more scored 0.013-0.038 less with it than with the most
+/// probable class on noisy generated clouds never trained on (docs/model.md, candidate WI).
+pub const MARGIN: f64 = 0.01;
+
 /// The sharp-edge confusion of one cloud's `probabilities` against its `truth` (class codes)
 /// at each of `decisions` (sensitivities; `None`, the most probable class), from one
 /// detection.
@@ -200,13 +206,17 @@ impl Calibration {
             .collect()
     }
 
-    /// The decision of the highest median MCC, the first of equals, so the most probable
-    /// class unless a sensitivity beats it: what training records in a model file measured on
-    /// validation clouds (`ModelFile::sensitivity`).
+    /// The sensitivity of the highest median MCC (the first of equals) if it beats the most
+    /// probable class by more than [`MARGIN`], else the most probable class: what training
+    /// records in a model file measured on validation clouds (`ModelFile::sensitivity`).
     pub fn chosen_sensitivity(&self) -> Option<f32> {
         let mcc = self.median_mcc();
-        let best = (0..mcc.len()).fold(0, |b, i| if mcc[i] > mcc[b] { i } else { b });
-        DECISIONS[best]
+        let best = (1..mcc.len()).fold(1, |b, i| if mcc[i] > mcc[b] { i } else { b });
+        if mcc[best] > mcc[0] + MARGIN {
+            DECISIONS[best]
+        } else {
+            None
+        }
     }
 }
 
@@ -217,8 +227,8 @@ pub fn describe(sensitivity: Option<f32>) -> String {
     })
 }
 
-/// `file` deciding by the rule of the highest median MCC on the labelled `validation` clouds
-/// ([`Calibration::chosen_sensitivity`]), as training records it, with the measurement it was
+/// `file` deciding by the rule [`Calibration::chosen_sensitivity`] picks on the labelled
+/// `validation` clouds, as training records it, with the measurement it was
 /// chosen on; without clouds, by the most probable class. The clouds must be the training
 /// kinds but never trained on, nor evaluated on: the choice is the model's default for every
 /// user.
@@ -244,10 +254,10 @@ pub fn section(
 ) -> Result<String, NnError> {
     let mut out = format!(
         "## Calibration and sensitivity\n\nValidation clouds ({validation}, training noise): \
-         expected calibration error of p_sharp {:.4}, of p_boundary {:.4}; the highest median \
-         sharp MCC at {}, which the model records as its default decision (every table above; \
-         `--sensitivity` overrides it).\n\np_sharp reliability on them:\n\n{}\n\
-         Median sharp MCC against `--sensitivity`:\n\n",
+         expected calibration error of p_sharp {:.4}, of p_boundary {:.4}; the model's default \
+         decision, {} (the most probable class unless a sensitivity beats its median sharp MCC \
+         by more than {MARGIN}; every table above; `--sensitivity` overrides it).\n\n\
+         p_sharp reliability on them:\n\n{}\nMedian sharp MCC against `--sensitivity`:\n\n",
         on_validation.sharp.expected_calibration_error(),
         on_validation.boundary.expected_calibration_error(),
         describe(detector.sensitivity()),
@@ -388,6 +398,25 @@ mod tests {
         let c = of(vec![a.clone(), a, b]);
         assert_eq!(c.median_mcc()[7], 1.0);
         assert_eq!(c.chosen_sensitivity(), Some(0.7));
+    }
+
+    #[test]
+    fn a_sensitivity_needs_the_margin() {
+        let confusion = |tp, fp, tn, fn_| BinaryConfusion { tp, fp, tn, fn_ };
+        // MCC (90 * 890 - 10 * 10) / sqrt(100 * 100 * 900 * 900) = 80000 / 90000.
+        let argmax = confusion(90, 10, 890, 10);
+        // (91 * 890 - 10 * 9) / sqrt(101 * 100 * 900 * 899) = 80900 / 90398.6: 0.0060 more.
+        let slightly = confusion(91, 10, 890, 9);
+        // (95 * 895 - 5 * 5) / sqrt(100 * 100 * 900 * 900) = 85000 / 90000: 0.0556 more.
+        let clearly = confusion(95, 5, 895, 5);
+        let mut at = vec![argmax; DECISIONS.len()];
+        at[6] = slightly;
+        let c = of(vec![at.clone()]);
+        assert!((c.median_mcc()[0] - 80000.0 / 90000.0).abs() < 1e-12);
+        assert!((c.median_mcc()[6] - 0.894925).abs() < 1e-6);
+        assert_eq!(c.chosen_sensitivity(), None);
+        at[3] = clearly;
+        assert_eq!(of(vec![at]).chosen_sensitivity(), Some(0.3));
     }
 
     #[test]
