@@ -190,7 +190,7 @@ fn calibrate_on_records_the_decision_that_detect_applies() {
     );
     assert!(run.status.success(), "{}", stderr(&run));
     let file = ModelFile::load(&model).unwrap();
-    // The decision of the highest median MCC on those clouds, measured by the library.
+    // The decision the library chooses on those clouds (`Calibration::chosen_sensitivity`).
     let loaded = TrainingSource::parse(validation).unwrap().load().unwrap();
     let clouds: Vec<_> = (loaded.iter())
         .map(|(name, c)| TrainingCloud::new(name, &c.cloud, &c.labels))
