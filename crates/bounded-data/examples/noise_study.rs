@@ -1,7 +1,9 @@
 //! How the noisy ABC sample was made, and what that noise leaves to find: for each cloud
 //! present in both a clean and a noisy PCEDNet directory (same points, same order), the
 //! displacement of every point split along and across the file's normal (in units of the
-//! clean median spacing), and the MCC of two oracles that call a noisy point sharp when it
+//! clean median spacing; along it also its root mean square, in spacings and as a share of the
+//! bounding box's diagonal, which tells whether the noise was scaled to the spacing or to the
+//! object), and the MCC of two oracles that call a noisy point sharp when it
 //! lies within `t` spacings of the exact crease line (the line through the two clean sharp
 //! points nearest to it), `t` the best of a few: one measures that distance as it is, the
 //! other across the point's true normal (the part along it dropped). The first knows the
@@ -32,9 +34,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let clean_dir = PathBuf::from(args.next().ok_or(usage)?);
     let noisy_dir = PathBuf::from(args.next().ok_or(usage)?);
     println!(
-        "| cloud | points | along normal | across normal | line oracle MCC (t) | line and normal oracle MCC (t) |"
+        "| cloud | points | along normal, median / rms | rms along / diagonal | across normal | line oracle MCC (t) | line and normal oracle MCC (t) |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     let (mut line, mut line_and_normal) = (Vec::new(), Vec::new());
     for clean_path in cloud_files(&clean_dir)? {
         let noisy_path = noisy_dir.join(clean_path.file_name().ok_or("bad file name")?);
@@ -43,10 +45,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let study = study(&clean_path, &noisy_path)?;
         println!(
-            "| {} | {} | {:.3} | {:.3} | {:.3} ({}) | {:.3} ({}) |",
+            "| {} | {} | {:.3} / {:.3} | {:.5} | {:.3} | {:.3} ({}) | {:.3} ({}) |",
             clean_path.file_stem().unwrap_or_default().to_string_lossy(),
             study.points,
             study.along,
+            study.rms_along,
+            study.rms_along * study.spacing / study.diagonal,
             study.across,
             study.line.mcc,
             study.line.threshold,
@@ -68,6 +72,12 @@ struct Study {
     points: usize,
     /// Median |displacement . normal| / spacing.
     along: f64,
+    /// Root mean square of displacement . normal / spacing.
+    rms_along: f64,
+    /// The clean cloud's median nearest-neighbour distance.
+    spacing: f64,
+    /// The clean cloud's bounding-box diagonal.
+    diagonal: f64,
     /// Median length of the displacement's rest / spacing.
     across: f64,
     line: Oracle,
@@ -131,6 +141,9 @@ fn study(clean_path: &Path, noisy_path: &Path) -> Result<Study, Box<dyn std::err
     Ok(Study {
         points: c.len(),
         along: median(&along).unwrap_or(f64::NAN),
+        rms_along: (along.iter().map(|a| a * a).sum::<f64>() / along.len() as f64).sqrt(),
+        spacing,
+        diagonal: diagonal(&c),
         across: median(&across).unwrap_or(f64::NAN),
         line: oracle(&|_| None),
         line_and_normal: oracle(&|i| Some(normals[i])),
@@ -231,6 +244,15 @@ fn positions(labelled: &LabelledCloud) -> Vec<V3> {
     (0..labelled.cloud.len())
         .map(|i| labelled.cloud.position_f64(i))
         .collect()
+}
+
+/// The length of the diagonal of the points' axis-aligned bounding box.
+fn diagonal(points: &[V3]) -> f64 {
+    let extent = |axis: usize| {
+        let values = points.iter().map(|p| p[axis]);
+        values.clone().fold(f64::NEG_INFINITY, f64::max) - values.fold(f64::INFINITY, f64::min)
+    };
+    norm([extent(0), extent(1), extent(2)])
 }
 
 fn dist(a: V3, b: V3) -> f64 {
