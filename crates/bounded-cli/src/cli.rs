@@ -127,7 +127,8 @@ pub struct TrainArgs {
     /// beside their features YAML files), or `generated:KIND:SEED[:SHAPES]` for a synthetic
     /// set made on the fly (options after it: free-form label rules
     /// `:depth=1:angle=10:band=0.5:noise=3` and features three times the default size
-    /// `:size=3`; on the mesh kinds sparse planes `:faces=3`, blocks
+    /// `:size=3`; on the mesh kinds sparse planes `:faces=3`, crease rows spread up to
+    /// 1.5 times their step along the line `:rows=1.5`, blocks
     /// with 12-25 degree creases `:shallow=30`, sharp bands `:band=1.5`, a fifth of the
     /// points kept farther than 2 spacings from a crease `:sparse=0.2:dense=2`). Repeat to
     /// combine.
@@ -258,7 +259,7 @@ pub enum PositiveArg {
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
     /// Which kind of set: cad, random, boundary, mixed or freeform; options after it as for
-    /// `train --data` (`freeform:depth=1:angle=10:band=1.5:noise=3:size=3`, `cad:faces=3:shallow=30:band=1.5:sparse=0.2:dense=2`).
+    /// `train --data` (`freeform:depth=1:angle=10:band=1.5:noise=3:size=3`, `cad:faces=3:rows=1.5:shallow=30:band=1.5:sparse=0.2:dense=2`).
     #[arg(long, default_value = "mixed")]
     pub kind: String,
     /// Output directory (created).

@@ -15,7 +15,8 @@
 //! meant to call bands rather than one row. With [`SetConfig::thinning`] (spec options
 //! `sparse=F` and `dense=R`), the points farther than `R` spacings from every crease are
 //! thinned to the share `F`: a density step, as a CAD triangulation's vertices crowd along
-//! its creases.
+//! its creases. With [`SetConfig::row_spacing`] above 1 (spec option `rows=R`), the crease
+//! and border rows are spread along their lines, as the ABC clouds' are.
 //!
 //! The free-form kind ([`SetKind::Freeform`], see [`generate_freeform`]) is built
 //! differently: smooth parametric bases (height fields, bent and twisted sheets, shells)
@@ -179,6 +180,12 @@ pub struct SetConfig {
     /// rows' spacing: each such shape draws its [`ShapeSpec::face_spacing`] uniformly from 1
     /// to this (at most [`MAX_FACE_SPACING`]; 1, the default, fills every face alike).
     pub face_spacing: f64,
+    /// The sparsest crease and border rows in mesh-vertex mode, in multiples of their usual
+    /// step along the line: each such shape draws its [`ShapeSpec::row_spacing`] uniformly
+    /// from 1 to this (at most [`MAX_ROW_SPACING`]; 1, the default, leaves the rows as they
+    /// were). The ABC clouds' sharp rows are 1.25-1.44 median spacings apart along their
+    /// creases, the default rows 0.8-1.1; 1.5 reaches about 1.45 (docs/model.md).
+    pub row_spacing: f64,
     /// The weight of [`ShapeKind::ShallowRidges`] among the mesh kinds' shapes, whose weights
     /// sum to about 30 in the CAD sets (0, the default, draws none and leaves every other
     /// draw of a set as it was; 30 makes about half the shapes shallow ridges).
@@ -243,6 +250,10 @@ pub const MAX_SHALLOW: f64 = 1000.0;
 /// spacings wide (steps 160), and too few of them fit on a cloud of the default size.
 pub const MAX_FEATURE_SIZE: f64 = 8.0;
 
+/// The largest [`SetConfig::row_spacing`]: rows twice their usual step apart are barely
+/// rows, the faces' points as close to the crease as its own.
+pub const MAX_ROW_SPACING: f64 = 2.0;
+
 /// The largest [`SetConfig::face_spacing`]: sparser planes hold almost no points between
 /// their crease rows.
 pub const MAX_FACE_SPACING: f64 = 8.0;
@@ -263,6 +274,7 @@ impl SetConfig {
             outlier_fraction: 0.002,
             label_rule: LabelRule::default(),
             face_spacing: 1.0,
+            row_spacing: 1.0,
             shallow: 0.0,
             band: None,
             feature_size: 1.0,
@@ -285,6 +297,7 @@ impl SetConfig {
         self.noise_levels.iter().try_for_each(|&l| check_noise(l))?;
         check_outlier_fraction(self.outlier_fraction)?;
         check_face_spacing(self.face_spacing)?;
+        check_row_spacing(self.row_spacing)?;
         check_feature_size(self.feature_size)?;
         self.band.map_or(Ok(()), check_band)?;
         self.thinning.as_ref().map_or(Ok(()), Thinning::validate)?;
@@ -378,9 +391,15 @@ impl SetConfig {
         let sampling = self.kind.sampling(rng);
         let (points, noise, outlier_fraction) = self.amounts(rng);
         let seed = rng.random();
-        // Drawn last, so that sparse faces leave every other draw of the shape as it was.
+        // Drawn last, so that sparse faces and rows leave every other draw of the shape as it
+        // was.
         let face_spacing = if self.face_spacing > 1.0 {
             rng.random_range(1.0..=self.face_spacing)
+        } else {
+            1.0
+        };
+        let row_spacing = if self.row_spacing > 1.0 {
+            rng.random_range(1.0..=self.row_spacing)
         } else {
             1.0
         };
@@ -393,6 +412,7 @@ impl SetConfig {
             outlier_fraction,
             seed,
             face_spacing,
+            row_spacing,
             band: self.band,
             thinning: self.thinning,
         }
@@ -438,6 +458,9 @@ pub struct ShapeSpec {
     /// In mesh-vertex mode, the minimum distance of the fill on planar faces, in multiples
     /// of the crease rows' and curved faces' (1: the same everywhere).
     pub face_spacing: f64,
+    /// In mesh-vertex mode, the step of the crease and border rows along their lines, in
+    /// multiples of the usual one (1: as the faces' spacing).
+    pub row_spacing: f64,
     /// Half-width of the sharp band, in units of the cloud's median nearest-neighbour
     /// spacing (measured on the clean points, as the noise is): every point that close to a
     /// crease is sharp, as the free-form kind's [`LabelRule::band`] labels its kinks, so that
@@ -485,6 +508,7 @@ pub fn generate_one(
 pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
     check_noise(spec.noise)?;
     check_face_spacing(spec.face_spacing)?;
+    check_row_spacing(spec.row_spacing)?;
     spec.band.map_or(Ok(()), check_band)?;
     spec.thinning.as_ref().map_or(Ok(()), Thinning::validate)?;
     check_outlier_fraction(spec.outlier_fraction)?;
@@ -500,6 +524,7 @@ pub fn generate_shape(spec: &ShapeSpec) -> Result<LabelledCloud, DataError> {
         spec.sampling,
         spec.points,
         spec.face_spacing,
+        spec.row_spacing,
         &mut rng,
     );
     let spacing = perturb::median_spacing(&sampled.points, sampled.spacing_hint);
@@ -573,6 +598,13 @@ fn check_face_spacing(spacing: f64) -> Result<(), DataError> {
             "face spacing {spacing}: a multiple of the crease rows' spacing, 1 to \
              {MAX_FACE_SPACING}"
         )
+    })
+}
+
+/// A row spacing must lie in `1..=MAX_ROW_SPACING`.
+fn check_row_spacing(spacing: f64) -> Result<(), DataError> {
+    check_within(spacing, 1.0..=MAX_ROW_SPACING, || {
+        format!("row spacing {spacing}: a multiple of the rows' usual step, 1 to {MAX_ROW_SPACING}")
     })
 }
 
@@ -666,7 +698,8 @@ impl SetConfig {
     /// label rules `depth=`, `angle=`, `band=` and `noise=` (its [`LabelRule`]'s
     /// `min_depth`, `min_angle`, `band` and `min_depth_per_noise`) and `size=`
     /// ([`feature_size`](Self::feature_size)); for the mesh kinds
-    /// `faces=` ([`face_spacing`](Self::face_spacing)), `shallow=`
+    /// `faces=` ([`face_spacing`](Self::face_spacing)), `rows=`
+    /// ([`row_spacing`](Self::row_spacing)), `shallow=`
     /// ([`shallow`](Self::shallow)), `band=` ([`band`](Self::band)), `sparse=` and `dense=`
     /// ([`thinning`](Self::thinning)'s share kept and radius). An option of the other kinds
     /// is refused.
@@ -676,8 +709,8 @@ impl SetConfig {
         for option in options {
             let not_an_option = || {
                 bad(format!(
-                    "{option:?} is not depth=, angle=, band=, noise=, size=, faces=, shallow=, \
-                     sparse= or dense= a number"
+                    "{option:?} is not depth=, angle=, band=, noise=, size=, faces=, rows=, \
+                     shallow=, sparse= or dense= a number"
                 ))
             };
             let (name, value) = option.split_once('=').ok_or_else(not_an_option)?;
@@ -691,6 +724,7 @@ impl SetConfig {
                 "noise" => (&mut label.min_depth_per_noise, true),
                 "size" => (&mut self.feature_size, true),
                 "faces" => (&mut self.face_spacing, false),
+                "rows" => (&mut self.row_spacing, false),
                 "shallow" => (&mut self.shallow, false),
                 "sparse" => (&mut self.thinning.get_or_insert_default().keep, false),
                 "dense" => (&mut self.thinning.get_or_insert_default().radius, false),
@@ -799,6 +833,7 @@ mod tests {
             outlier_fraction: 0.01,
             seed: 0,
             face_spacing: 1.0,
+            row_spacing: 1.0,
             band: None,
             thinning: None,
         };
@@ -838,6 +873,7 @@ mod tests {
             outlier_fraction: 0.0,
             seed: 0,
             face_spacing: 1.0,
+            row_spacing: 1.0,
             band: None,
             thinning: None,
         };
@@ -871,6 +907,7 @@ mod tests {
                 outlier_fraction: 0.0,
                 seed: 11,
                 face_spacing: 1.0,
+                row_spacing: 1.0,
                 band: None,
                 thinning: None,
             };
@@ -913,6 +950,7 @@ mod tests {
             outlier_fraction: 0.0,
             seed: 1,
             face_spacing: 1.0,
+            row_spacing: 1.0,
             band: None,
             thinning: None,
         };
@@ -933,6 +971,14 @@ mod tests {
             })
             .unwrap_err();
             assert!(err.to_string().contains("outlier fraction"), "{err}");
+        }
+        for row_spacing in [0.5, MAX_ROW_SPACING + 1.0, f64::NAN] {
+            let err = generate_shape(&ShapeSpec {
+                row_spacing,
+                ..spec.clone()
+            })
+            .unwrap_err();
+            assert!(err.to_string().contains("row spacing"), "{err}");
         }
         for face_spacing in [0.5, MAX_FACE_SPACING + 1.0, f64::NAN] {
             let err = generate_shape(&ShapeSpec {
@@ -1080,6 +1126,37 @@ mod tests {
     }
 
     #[test]
+    fn spread_rows_change_only_the_row_spacing_drawn() {
+        let plain = small(SetKind::Cad, 8, 12);
+        let spread = plain.clone().with_options(&["rows=1.5"]).unwrap();
+        assert_eq!(
+            plain,
+            SetConfig {
+                row_spacing: 1.0,
+                ..spread.clone()
+            }
+        );
+        for i in 0..plain.shapes {
+            let (CloudSpec::Mesh(a), CloudSpec::Mesh(b)) = (plain.spec(i), spread.spec(i)) else {
+                panic!("a mesh kind gives mesh shapes");
+            };
+            assert_eq!(a.row_spacing, 1.0);
+            assert!((1.0..=1.5).contains(&b.row_spacing), "{}", b.row_spacing);
+            assert_eq!(
+                ShapeSpec {
+                    row_spacing: 1.0,
+                    ..b
+                },
+                a
+            );
+        }
+        for bad in ["rows=0.9", "rows=2.5"] {
+            let err = plain.clone().with_options(&[bad]).unwrap_err().to_string();
+            assert!(err.contains("row spacing"), "{err}");
+        }
+    }
+
+    #[test]
     fn sparse_faces_keep_the_shapes_and_raise_the_share_of_crease_rows() {
         let plain = small(SetKind::Cad, 8, 12);
         let sparse = SetConfig {
@@ -1097,6 +1174,7 @@ mod tests {
             assert_eq!(
                 ShapeSpec {
                     face_spacing: 1.0,
+                    row_spacing: 1.0,
                     band: None,
                     thinning: None,
                     ..b.clone()

@@ -159,21 +159,29 @@ pub(crate) fn random_direction(rng: &mut impl Rng) -> V3 {
 
 /// Samples about `target` points on a welded, non-empty `mesh` whose features are `features`;
 /// in mesh-vertex mode, planar faces are filled with `face_spacing` (1 or more) times the
-/// minimum distance of the rows and the curved faces.
+/// minimum distance of the rows and the curved faces, and the rows' points are `row_spacing`
+/// (1 or more) times their usual step apart along their lines.
 pub(crate) fn sample(
     mesh: &Mesh,
     features: &Features,
     sampling: Sampling,
     target: usize,
     face_spacing: f64,
+    row_spacing: f64,
     rng: &mut impl Rng,
 ) -> Sampled {
     let density = Density::random(mesh, rng);
     let surface = Surface::new(mesh, &density);
     match sampling {
-        Sampling::MeshVertex => {
-            mesh_vertex(&surface, &density, features, target, face_spacing, rng)
-        }
+        Sampling::MeshVertex => mesh_vertex(
+            &surface,
+            &density,
+            features,
+            target,
+            face_spacing,
+            row_spacing,
+            rng,
+        ),
         Sampling::Random => random(&surface, &density, features, target, rng),
     }
 }
@@ -184,6 +192,7 @@ fn mesh_vertex(
     features: &Features,
     target: usize,
     face_spacing: f64,
+    row_spacing: f64,
     rng: &mut impl Rng,
 ) -> Sampled {
     let (attempts_per_area, fill_density) = FILL_LEVELS[rng.random_range(0..FILL_LEVELS.len())];
@@ -221,8 +230,9 @@ fn mesh_vertex(
     );
     let mut labels = Vec::with_capacity(target + target / 4);
     // Crease rows are a little sparser than the minimum distance, like the face points'
-    // typical nearest-neighbour distance.
-    let row_step = rng.random_range(1.0..1.2);
+    // typical nearest-neighbour distance; `row_spacing` spreads them further, as the ABC
+    // clouds' rows are (drawn before it, so that it changes nothing else).
+    let row_step = rng.random_range(1.0..1.2) * row_spacing;
     for (class, lines) in [
         (Class::Sharp, &features.sharp),
         (Class::Boundary, &features.border),
@@ -388,7 +398,7 @@ mod tests {
         let cube = unit_cube();
         let f = cube.features();
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let s = sample(&cube, &f, Sampling::MeshVertex, 6000, 1.0, &mut rng);
+        let s = sample(&cube, &f, Sampling::MeshVertex, 6000, 1.0, 1.0, &mut rng);
         let mut sharp = 0;
         for (p, &c) in s.points.iter().zip(&s.labels) {
             let on_edge = cube_edge_distance(*p) < 1e-9;
@@ -429,6 +439,46 @@ mod tests {
         d[d.len() / 2]
     }
 
+    /// The median nearest-neighbour distance among the non-edge points and among the sharp
+    /// ones.
+    fn face_and_row_spacing(s: &Sampled) -> (f64, f64) {
+        let of = |class| {
+            let p: Vec<V3> = (s.points.iter().zip(&s.labels))
+                .filter(|(_, c)| **c == class)
+                .map(|(p, _)| *p)
+                .collect();
+            median_nearest(&p)
+        };
+        (of(Class::NonEdge), of(Class::Sharp))
+    }
+
+    #[test]
+    fn spread_rows_step_further_along_the_creases_only() {
+        let cube = unit_cube();
+        let f = cube.features();
+        let [(face_a, row_a), (face_b, row_b)] = [1.0, 1.6].map(|row_spacing| {
+            let mut rng = ChaCha8Rng::seed_from_u64(7);
+            let s = sample(
+                &cube,
+                &f,
+                Sampling::MeshVertex,
+                4000,
+                1.0,
+                row_spacing,
+                &mut rng,
+            );
+            face_and_row_spacing(&s)
+        });
+        // The same step drawn, times 1.6: a cube's edges are straight, so each row's
+        // neighbours are its step apart (rounded to a whole number of steps per edge).
+        assert!((1.5..1.7).contains(&(row_b / row_a)), "{row_a} -> {row_b}");
+        // The faces keep their minimum distance.
+        assert!(
+            (0.95..1.05).contains(&(face_b / face_a)),
+            "{face_a} -> {face_b}"
+        );
+    }
+
     #[test]
     fn sparse_faces_spread_the_fill_of_planes_only() {
         let cube = unit_cube();
@@ -441,18 +491,12 @@ mod tests {
                 Sampling::MeshVertex,
                 4000,
                 face_spacing,
+                1.0,
                 &mut rng,
             );
             let n = s.points.len() as f64;
             assert!(n > 0.7 * 4000.0 && n < 1.3 * 4000.0, "{face_spacing}: {n}");
-            let of = |class| {
-                let p: Vec<V3> = (s.points.iter().zip(&s.labels))
-                    .filter(|(_, c)| **c == class)
-                    .map(|(p, _)| *p)
-                    .collect();
-                median_nearest(&p)
-            };
-            (of(Class::NonEdge), of(Class::Sharp))
+            face_and_row_spacing(&s)
         });
         // Face points lie about twice as far apart, relative to the crease rows' step.
         let ratio = |(face, row): (f64, f64)| face / row;
@@ -471,6 +515,7 @@ mod tests {
                 Sampling::MeshVertex,
                 1500,
                 face_spacing,
+                1.0,
                 &mut rng,
             )
             .points
@@ -483,7 +528,7 @@ mod tests {
         let cube = unit_cube();
         let f = cube.features();
         let mut rng = ChaCha8Rng::seed_from_u64(2);
-        let s = sample(&cube, &f, Sampling::Random, 6000, 1.0, &mut rng);
+        let s = sample(&cube, &f, Sampling::Random, 6000, 1.0, 1.0, &mut rng);
         assert_eq!(s.points.len(), 6000);
         // The local spacing is at most sqrt(6 / (6000 * 0.4)) = 0.05.
         let max_band = W_SHARP * 0.05;
@@ -515,6 +560,7 @@ mod tests {
                 sampling,
                 6000,
                 1.0,
+                1.0,
                 &mut ChaCha8Rng::seed_from_u64(seed),
             );
             let before = s.labels.clone();
@@ -543,7 +589,7 @@ mod tests {
         for (sampling, seed) in [(Sampling::MeshVertex, 7), (Sampling::Random, 8)] {
             let draw = || {
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                sample(&cube, &f, sampling, 8000, 1.0, &mut rng)
+                sample(&cube, &f, sampling, 8000, 1.0, 1.0, &mut rng)
             };
             let (full, mut thin) = (draw(), draw());
             thin_away_from(
@@ -597,7 +643,7 @@ mod tests {
         .welded();
         let f = disc.features();
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let s = sample(&disc, &f, Sampling::MeshVertex, 3000, 1.0, &mut rng);
+        let s = sample(&disc, &f, Sampling::MeshVertex, 3000, 1.0, 1.0, &mut rng);
         // The border is the 72-gon inscribed in the unit circle: its points have radius in
         // [cos(2.5 deg), 1].
         let inner = (2.5_f64).to_radians().cos();
@@ -624,7 +670,7 @@ mod tests {
         let f = sphere.features();
         for sampling in [Sampling::MeshVertex, Sampling::Random] {
             let mut rng = ChaCha8Rng::seed_from_u64(4);
-            let s = sample(&sphere, &f, sampling, 2000, 1.0, &mut rng);
+            let s = sample(&sphere, &f, sampling, 2000, 1.0, 1.0, &mut rng);
             assert!(
                 s.labels.iter().all(|&c| c == Class::NonEdge),
                 "{sampling:?}"

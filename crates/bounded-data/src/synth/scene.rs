@@ -33,6 +33,7 @@ pub fn demo_scene(seed: u64) -> Result<LabelledCloud, DataError> {
             outlier_fraction: 0.0,
             seed: seed.wrapping_mul(31).wrapping_add(i as u64),
             face_spacing: 1.0,
+            row_spacing: 1.0,
             band: None,
             thinning: None,
         };
