@@ -955,38 +955,38 @@ mod tests {
             thinning: None,
         };
         assert!(generate_shape(&spec).is_ok());
-        for noise in [-0.1, f64::NAN, f64::INFINITY] {
-            let err = generate_shape(&ShapeSpec {
-                noise,
-                ..spec.clone()
-            })
-            .unwrap_err();
-            assert!(matches!(err, DataError::Generator { .. }), "{noise}: {err}");
-            assert!(err.to_string().contains("noise level"), "{err}");
-        }
-        for outlier_fraction in [-0.01, 1.5, f64::NAN] {
-            let err = generate_shape(&ShapeSpec {
-                outlier_fraction,
-                ..spec.clone()
-            })
-            .unwrap_err();
-            assert!(err.to_string().contains("outlier fraction"), "{err}");
-        }
-        for row_spacing in [0.5, MAX_ROW_SPACING + 1.0, f64::NAN] {
-            let err = generate_shape(&ShapeSpec {
-                row_spacing,
-                ..spec.clone()
-            })
-            .unwrap_err();
-            assert!(err.to_string().contains("row spacing"), "{err}");
-        }
-        for face_spacing in [0.5, MAX_FACE_SPACING + 1.0, f64::NAN] {
-            let err = generate_shape(&ShapeSpec {
-                face_spacing,
-                ..spec.clone()
-            })
-            .unwrap_err();
-            assert!(err.to_string().contains("face spacing"), "{err}");
+        // Every bad value is a generator error naming what is wrong.
+        type Set = fn(&mut ShapeSpec, f64);
+        let cases: [(&str, Set, [f64; 3]); 4] = [
+            (
+                "noise level",
+                |s, v| s.noise = v,
+                [-0.1, f64::NAN, f64::INFINITY],
+            ),
+            (
+                "outlier fraction",
+                |s, v| s.outlier_fraction = v,
+                [-0.01, 1.5, f64::NAN],
+            ),
+            (
+                "row spacing",
+                |s, v| s.row_spacing = v,
+                [0.5, MAX_ROW_SPACING + 1.0, f64::NAN],
+            ),
+            (
+                "face spacing",
+                |s, v| s.face_spacing = v,
+                [0.5, MAX_FACE_SPACING + 1.0, f64::NAN],
+            ),
+        ];
+        for (what, set, values) in cases {
+            for value in values {
+                let mut bad = spec.clone();
+                set(&mut bad, value);
+                let err = generate_shape(&bad).unwrap_err();
+                assert!(matches!(err, DataError::Generator { .. }), "{err}");
+                assert!(err.to_string().contains(what), "{what} {value}: {err}");
+            }
         }
         let mut set = small(SetKind::Cad, 1, 2);
         assert!(set.validate().is_ok());
@@ -1125,6 +1125,16 @@ mod tests {
         assert!(freeform.is_err());
     }
 
+    /// The specs of every shape of two sets of a mesh kind, side by side.
+    fn mesh_specs(a: &SetConfig, b: &SetConfig) -> Vec<(ShapeSpec, ShapeSpec)> {
+        (0..a.shapes)
+            .map(|i| match (a.spec(i), b.spec(i)) {
+                (CloudSpec::Mesh(a), CloudSpec::Mesh(b)) => (a, b),
+                _ => panic!("a mesh kind gives mesh shapes"),
+            })
+            .collect()
+    }
+
     #[test]
     fn spread_rows_change_only_the_row_spacing_drawn() {
         let plain = small(SetKind::Cad, 8, 12);
@@ -1136,10 +1146,7 @@ mod tests {
                 ..spread.clone()
             }
         );
-        for i in 0..plain.shapes {
-            let (CloudSpec::Mesh(a), CloudSpec::Mesh(b)) = (plain.spec(i), spread.spec(i)) else {
-                panic!("a mesh kind gives mesh shapes");
-            };
+        for (a, b) in mesh_specs(&plain, &spread) {
             assert_eq!(a.row_spacing, 1.0);
             assert!((1.0..=1.5).contains(&b.row_spacing), "{}", b.row_spacing);
             assert_eq!(
@@ -1164,10 +1171,7 @@ mod tests {
             ..plain.clone()
         };
         let (mut rows_plain, mut rows_sparse) = (0.0, 0.0);
-        for i in 0..plain.shapes {
-            let (CloudSpec::Mesh(a), CloudSpec::Mesh(b)) = (plain.spec(i), sparse.spec(i)) else {
-                panic!("a mesh kind gives mesh shapes");
-            };
+        for (a, b) in mesh_specs(&plain, &sparse) {
             // Everything but the face spacing is drawn as before.
             assert_eq!(a.face_spacing, 1.0);
             assert!((1.0..=3.0).contains(&b.face_spacing), "{}", b.face_spacing);

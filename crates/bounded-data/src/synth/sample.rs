@@ -458,7 +458,7 @@ mod tests {
         let f = cube.features();
         let [(face_a, row_a), (face_b, row_b)] = [1.0, 1.6].map(|row_spacing| {
             let mut rng = ChaCha8Rng::seed_from_u64(7);
-            let s = sample(
+            face_and_row_spacing(&sample(
                 &cube,
                 &f,
                 Sampling::MeshVertex,
@@ -466,8 +466,7 @@ mod tests {
                 1.0,
                 row_spacing,
                 &mut rng,
-            );
-            face_and_row_spacing(&s)
+            ))
         });
         // The same step drawn, times 1.6: a cube's edges are straight, so each row's
         // neighbours are its step apart (rounded to a whole number of steps per edge).
