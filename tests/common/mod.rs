@@ -38,6 +38,7 @@ pub fn box_cloud(points: usize, seed: u64) -> LabelledCloud {
         outlier_fraction: 0.0,
         seed,
         face_spacing: 1.0,
+        row_spacing: 1.0,
         band: None,
         thinning: None,
     })
