@@ -417,11 +417,11 @@ mod tests {
             ("generated:cad:1:2:faces=0.5", "face spacing 0.5"),
             (
                 "generated:freeform:1:2:3",
-                "\"3\" is not depth=, angle=, band=, noise=, size=, faces=, shallow=, sparse= or dense= a number",
+                "\"3\" is not depth=, angle=, band=, noise=, size=, faces=, rows=, shallow=, sparse= or dense= a number",
             ),
             (
                 "generated:freeform:1:2:depth=x",
-                "\"depth=x\" is not depth=, angle=, band=, noise=, size=, faces=, shallow=, sparse= or dense= a number",
+                "\"depth=x\" is not depth=, angle=, band=, noise=, size=, faces=, rows=, shallow=, sparse= or dense= a number",
             ),
             ("generated:freeform:1:2:band=0", "label band 0"),
             ("generated:freeform:1:2:size=9", "feature size 9"),
