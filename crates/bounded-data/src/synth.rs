@@ -184,7 +184,7 @@ pub struct SetConfig {
     /// step along the line: each such shape draws its [`ShapeSpec::row_spacing`] uniformly
     /// from 1 to this (at most [`MAX_ROW_SPACING`]; 1, the default, leaves the rows as they
     /// were). The ABC clouds' sharp rows are 1.25-1.44 median spacings apart along their
-    /// creases, the default rows 0.8-1.1; 1.5 reaches about 1.45 (docs/model.md).
+    /// creases, the default rows 0.8-1.1, rows drawn up to 1.5 times 1.0-1.6 (docs/model.md).
     pub row_spacing: f64,
     /// The weight of [`ShapeKind::ShallowRidges`] among the mesh kinds' shapes, whose weights
     /// sum to about 30 in the CAD sets (0, the default, draws none and leaves every other
@@ -459,7 +459,7 @@ pub struct ShapeSpec {
     /// of the crease rows' and curved faces' (1: the same everywhere).
     pub face_spacing: f64,
     /// In mesh-vertex mode, the step of the crease and border rows along their lines, in
-    /// multiples of the usual one (1: as the faces' spacing).
+    /// multiples of the usual one (1: 1.0-1.2 times the faces' minimum distance).
     pub row_spacing: f64,
     /// Half-width of the sharp band, in units of the cloud's median nearest-neighbour
     /// spacing (measured on the clean points, as the noise is): every point that close to a
