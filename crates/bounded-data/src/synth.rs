@@ -184,7 +184,7 @@ pub struct SetConfig {
     /// step along the line: each such shape draws its [`ShapeSpec::row_spacing`] uniformly
     /// from 1 to this (at most [`MAX_ROW_SPACING`]; 1, the default, leaves the rows as they
     /// were). The ABC clouds' sharp rows are 1.25-1.44 median spacings apart along their
-    /// creases, the default rows 0.8-1.1, rows drawn up to 1.5 times 1.0-1.6 (docs/model.md).
+    /// creases, the default rows 0.8-1.1; `rows=1.5` puts them 1.0-1.6 apart (docs/model.md).
     pub row_spacing: f64,
     /// The weight of [`ShapeKind::ShallowRidges`] among the mesh kinds' shapes, whose weights
     /// sum to about 30 in the CAD sets (0, the default, draws none and leaves every other
